@@ -1,0 +1,90 @@
+#pragma once
+// The one HDF5 wrapper of cgd (C API, parallel HDF5 through MPI-IO). Every collective call must be
+// made by every rank of the file's communicator in the same order. Errors opening/reading a file
+// throw InputError naming the file (and the dataset/attribute); write failures throw RunError.
+#include <hdf5.h>
+#include <mpi.h>
+
+#include <cstdint>
+#include <functional>
+#include <string>
+#include <vector>
+
+namespace cgd::h5 {
+
+class File {
+ public:
+  /// Create (truncate) `path` for parallel writing over `comm`. Collective.
+  static File create(const std::string& path, MPI_Comm comm);
+  /// Open an existing file read-only over `comm`. Collective. InputError if missing or not HDF5.
+  static File open_read(const std::string& path, MPI_Comm comm);
+
+  File(File&& other) noexcept;
+  File& operator=(File&& other) noexcept;
+  File(const File&) = delete;
+  File& operator=(const File&) = delete;
+  ~File();
+  void close();  // collective; idempotent
+
+  hid_t id() const { return file_; }
+  const std::string& path() const { return path_; }
+  MPI_Comm comm() const { return comm_; }
+
+  /// Attributes on an object path ("/" or a group such as "/params"; groups are created on
+  /// demand when writing). Every rank passes the same value; collective.
+  void set_attr(const std::string& object, const std::string& name, double value);
+  void set_attr(const std::string& object, const std::string& name, std::int64_t value);
+  void set_attr(const std::string& object, const std::string& name, const std::string& value);
+  void set_attr(const std::string& object, const std::string& name, const std::vector<double>& value);
+  void set_attr(const std::string& object, const std::string& name, const std::vector<std::int64_t>& value);
+  double attr_double(const std::string& object, const std::string& name) const;
+  std::int64_t attr_int(const std::string& object, const std::string& name) const;
+  std::string attr_string(const std::string& object, const std::string& name) const;
+  std::vector<double> attr_doubles(const std::string& object, const std::string& name) const;
+  std::vector<std::int64_t> attr_ints(const std::string& object, const std::string& name) const;
+  bool has_attr(const std::string& object, const std::string& name) const;
+
+  bool exists(const std::string& path) const;      // a group or dataset
+  void create_group(const std::string& path);      // with intermediate groups; collective
+  std::vector<std::uint64_t> dims(const std::string& dataset) const;
+
+  /// Distributed rows: a (total_rows x cols) dataset (cols = 1 gives a 1-D dataset) whose rows are
+  /// the concatenation of every rank's `local_rows` rows in rank order. Collective.
+  void write_rows(const std::string& dataset, const double* local, std::int64_t local_rows, int cols);
+  void write_rows(const std::string& dataset, const std::int64_t* local, std::int64_t local_rows, int cols);
+  /// Read rows [first_row, first_row + rows) of a 1-D or 2-D dataset (any rank, independent).
+  std::vector<double> read_rows_double(const std::string& dataset, std::int64_t first_row, std::int64_t rows) const;
+  std::vector<std::int64_t> read_rows_int(const std::string& dataset, std::int64_t first_row, std::int64_t rows) const;
+  /// Whole dataset, flattened (any rank).
+  std::vector<double> read_double(const std::string& dataset) const;
+  std::vector<std::int64_t> read_int(const std::string& dataset) const;
+
+  /// Distributed N-D block (row-major `global_dims`, e.g. {n_z, n_y, n_x, 3}); this rank writes the
+  /// hyperslab starting at `offset` with extent `count` from contiguous `local`. Collective.
+  void write_block(const std::string& dataset, const double* local, const std::vector<std::uint64_t>& global_dims,
+                   const std::vector<std::uint64_t>& offset, const std::vector<std::uint64_t>& count);
+  std::vector<double> read_block(const std::string& dataset, const std::vector<std::uint64_t>& offset,
+                                 const std::vector<std::uint64_t>& count) const;
+
+  /// A small dataset that every rank holds identically (rank 0's copy is written). Collective.
+  void write_replicated(const std::string& dataset, const std::vector<double>& data,
+                        const std::vector<std::uint64_t>& dims);
+  void write_replicated(const std::string& dataset, const std::vector<std::int64_t>& data,
+                        const std::vector<std::uint64_t>& dims);
+
+ private:
+  File(hid_t file, std::string path, MPI_Comm comm) : file_(file), path_(std::move(path)), comm_(comm) {}
+  hid_t file_ = -1;
+  std::string path_;
+  MPI_Comm comm_ = MPI_COMM_NULL;
+};
+
+/// Write `final_path` atomically: `body` fills a file created at a temporary name in the same
+/// folder; after a collective close rank 0 fsyncs and renames it into place, so a reader (or a
+/// run killed at any moment) never sees a half-written file. Collective.
+void write_atomically(const std::string& final_path, MPI_Comm comm, const std::function<void(File&)>& body);
+
+/// True if `path` exists and is a readable HDF5 file.
+bool is_hdf5(const std::string& path);
+
+}  // namespace cgd::h5

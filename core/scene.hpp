@@ -1,0 +1,121 @@
+#pragma once
+// Scene: what to simulate, as plain validated config structs (design.md, "Scenes").
+// core/scene.cpp is the only place that sees the TOML parser; physics code receives these structs.
+// SI units everywhere; the unit is in the name or the comment of every field.
+#include <array>
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace cgd {
+
+using Vec3 = std::array<double, 3>;
+
+struct DomainConfig {
+  Vec3 size_m{};                     // box edges (x, y = vertical, z), m; from size or size_dp * d_p
+  Vec3 gravity_m_s2{0.0, -9.81, 0.0};
+};
+
+struct ParticlesConfig {
+  double diameter_m = 75e-6;         // primary diameter d_p
+  double density_kg_m3 = 1500.0;     // rho_p
+  double solids_fraction = 0.05;     // domain-averaged <phi_p>
+  double parcel_size = 1.0;          // alpha = d_parcel / d_prim
+  double velocity_rms_m_s = 0.0;     // rms speed of the random initial velocities
+  std::uint64_t seed = 1;            // placement and velocities
+};
+
+enum class ContactModel { None, SpringDashpot };
+
+struct ContactConfig {
+  ContactModel model = ContactModel::SpringDashpot;
+  std::optional<double> gamma_star;  // dimensionless stiffness (models.md); or stiffness_n
+  std::optional<double> stiffness_n_N_m;
+  double t_star = 0.02;              // dt_DEM / t_c
+  double restitution = 0.9;
+  double friction = 0.1;             // Coulomb mu_pp; 0 switches off tangential history and rotation
+  double kn_over_kt = 3.5;
+  double gamman_over_gammat = 1.0;
+  double skin_over_dp = 0.15;        // Verlet skin, in primary diameters
+};
+
+enum class Coupling { Quiescent, OneWay, TwoWay };
+enum class DragLaw { Stokes, WenYu, Beetstra, Radl2014, Model };
+
+struct FluidConfig {
+  double density_kg_m3 = 1.3;
+  double viscosity_Pa_s = 1.8e-5;
+  std::array<int, 3> cells{0, 0, 0};  // from cells or dx_over_dp (0: not set)
+  double courant = 0.3;
+  Coupling coupling = Coupling::TwoWay;
+  DragLaw drag = DragLaw::Beetstra;
+  bool pressure_gradient_force = true;
+};
+
+struct RunConfig {
+  double end_time_s = 0.0;            // from end_time or end_time_tref * t_ref
+  double dump_interval_s = 0.0;       // from dump_interval or dump_interval_tref; 0: final state only
+  double series_interval_s = 0.0;     // 0: one series row per (fluid or DEM) output step, see sim
+  double checkpoint_wall_s = 600.0;   // wall-clock seconds between checkpoints
+  std::optional<double> dt_s;         // explicit time step (needed when contact.model = "none" and no fluid)
+};
+
+/// Numbers derived from the scene, printed at start and stored in every output file (/params).
+struct DerivedScales {
+  double particle_volume_m3 = 0;      // primary particle volume V_p
+  double particle_mass_kg = 0;        // primary particle mass
+  double parcel_diameter_m = 0;       // alpha * d_p (collision diameter)
+  double parcel_mass_kg = 0;          // alpha^3 * primary mass
+  // fluid-related; 0 when the scene has no fluid
+  double u_t_m_s = 0;                 // Schiller-Naumann terminal velocity (models.md convention)
+  double re_p = 0;                    // rho_f d u_t / mu_f
+  double fr_p = 0;                    // u_t^2 / (g d_p)
+  double l_ref_m = 0;                 // u_t^2 / g
+  double l_char_m = 0;                // L_ref Fr_p^(-2/3)
+  double t_ref_s = 0;                 // u_t / g
+  double stokes_relaxation_s = 0;     // rho_p d^2 / (18 mu_f)
+  // contact; 0 when contact.model = "none"
+  double k_n_N_m = 0, k_t_N_m = 0;    // parcel-scaled stiffness (k_n,parcel = alpha k_n)
+  double gamma_n_kg_s = 0, gamma_t_kg_s = 0;
+  double t_c_s = 0;                   // contact time of two equal parcels
+  double dt_dem_s = 0;
+  double dt_fluid_s = 0;              // 0 when no fluid is solved (estimated from Courant and u_t)
+  std::array<int, 3> cells{0, 0, 0};
+  std::int64_t particle_count = 0;    // parcels when alpha > 1
+  double memory_estimate_bytes = 0;
+};
+
+struct Scene {
+  std::string name;                   // file stem, e.g. "dry_settling"
+  std::string source_path;            // the file it was read from
+  std::string effective_toml;         // the scene after --set overrides, as TOML text
+  DomainConfig domain;
+  ParticlesConfig particles;
+  ContactConfig contact;
+  std::optional<FluidConfig> fluid;   // absent: dry granular run, no grid
+  RunConfig run;
+  DerivedScales derived;
+
+  bool has_contacts() const { return contact.model != ContactModel::None; }
+  bool has_friction() const { return has_contacts() && contact.friction > 0.0; }
+  bool solves_fluid() const { return fluid && fluid->coupling != Coupling::Quiescent; }
+};
+
+/// Load, apply overrides ("section.key=value"), validate and derive. Throws InputError whose
+/// message names the file, the key, the value given and what is allowed. Writes nothing.
+Scene load_scene(const std::string& path, const std::vector<std::string>& overrides = {});
+
+/// Same, from TOML text (tests); `origin` stands in for the file name in messages.
+Scene load_scene_from_string(const std::string& toml_text, const std::string& origin,
+                             const std::vector<std::string>& overrides = {});
+
+/// Human-readable table of the effects that are on and the derived numbers (printed at start).
+std::string describe_scene(const Scene& scene);
+
+/// Names used in files and messages.
+const char* to_string(ContactModel m);
+const char* to_string(Coupling c);
+const char* to_string(DragLaw d);
+
+}  // namespace cgd
