@@ -37,11 +37,14 @@ class File {
   void set_attr(const std::string& object, const std::string& name, const std::string& value);
   void set_attr(const std::string& object, const std::string& name, const std::vector<double>& value);
   void set_attr(const std::string& object, const std::string& name, const std::vector<std::int64_t>& value);
+  /// A list of strings (1-D array of variable-length UTF-8 strings; h5py reads an array of str).
+  void set_attr(const std::string& object, const std::string& name, const std::vector<std::string>& value);
   double attr_double(const std::string& object, const std::string& name) const;
   std::int64_t attr_int(const std::string& object, const std::string& name) const;
   std::string attr_string(const std::string& object, const std::string& name) const;
   std::vector<double> attr_doubles(const std::string& object, const std::string& name) const;
   std::vector<std::int64_t> attr_ints(const std::string& object, const std::string& name) const;
+  std::vector<std::string> attr_strings(const std::string& object, const std::string& name) const;
   bool has_attr(const std::string& object, const std::string& name) const;
 
   bool exists(const std::string& path) const;      // a group or dataset

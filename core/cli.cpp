@@ -1,0 +1,91 @@
+// Shared command-line front of the cgd tools: CLI11 parsing and the exit-status contract.
+#include "core/cli.hpp"
+
+#include <mpi.h>
+
+#include <CLI/CLI.hpp>
+#include <filesystem>
+#include <iostream>
+#include <sstream>
+
+#include "core/error.hpp"
+
+#ifndef CGD_VERSION
+#define CGD_VERSION "unknown"
+#endif
+
+namespace cgd {
+
+bool is_output_rank() {
+  int initialized = 0, finalized = 0;
+  MPI_Initialized(&initialized);
+  MPI_Finalized(&finalized);
+  if (!initialized || finalized) return true;
+  int rank = 0;
+  MPI_Comm_rank(MPI_COMM_WORLD, &rank);
+  return rank == 0;
+}
+
+void parse_command_line(CLI::App& app, int argc, char** argv, const std::string& tool_name) {
+  app.set_version_flag("--version", tool_name + " " + CGD_VERSION, "Print the version and exit");
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    std::ostringstream out, err;
+    const int status = app.exit(e, out, err);
+    // CLI11 reports help and version with status 0; every other parse error is bad input.
+    throw CommandLineExit(status == 0 ? kExitOk : kExitBadInput, out.str(), err.str());
+  }
+}
+
+RunOptions parse_run_command_line(int argc, char** argv, const std::string& tool_name, const std::string& description,
+                                  const std::function<void(CLI::App&)>& add_options) {
+  RunOptions options;
+  CLI::App app{description, tool_name};
+  app.add_option("scene", options.scene_path, "Scene file (TOML), e.g. data/scenes/dry_settling.toml")
+      ->required()
+      ->type_name("SCENE.toml");
+  app.add_option("--set", options.overrides,
+                 "Override one scene key, SECTION.KEY=VALUE with the value in TOML "
+                 "(e.g. --set particles.solids_fraction=0.2); repeatable")
+      ->type_name("KEY=VALUE")
+      ->take_all()
+      ->allow_extra_args(false);
+  app.add_option("-o,--output", options.output_dir, "Run directory (default: out/<stage>/<scene name>)")
+      ->type_name("DIR");
+  app.add_flag("--restart", options.restart, "Continue from the checkpoint in the run directory");
+  app.add_flag("--quiet", options.quiet, "No progress output");
+  if (add_options) add_options(app);
+  parse_command_line(app, argc, argv, tool_name);
+  return options;
+}
+
+std::string default_run_directory(const std::string& stage, const std::string& scene_path) {
+  return (std::filesystem::path("out") / stage / std::filesystem::path(scene_path).stem()).string();
+}
+
+int run_tool(const std::function<int()>& body) {
+  const auto report = [](const std::string& text) {
+    if (is_output_rank()) std::cerr << text << std::flush;
+  };
+  try {
+    return body();
+  } catch (const CommandLineExit& e) {
+    if (is_output_rank()) {
+      std::cout << e.out_text() << std::flush;
+      std::cerr << e.err_text() << std::flush;
+    }
+    return e.status();
+  } catch (const InputError& e) {
+    report(std::string("error: ") + e.what() + "\n");
+    return kExitBadInput;
+  } catch (const RunError& e) {
+    report(std::string("run failed: ") + e.what() + "\n");
+    return kExitRunFailed;
+  } catch (const std::exception& e) {
+    report(std::string("run failed (internal error): ") + e.what() + "\n");
+    return kExitRunFailed;
+  }
+}
+
+}  // namespace cgd

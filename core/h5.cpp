@@ -1,0 +1,648 @@
+// cgd::h5 — the HDF5 wrapper (C API over the MPI-IO driver). See h5.hpp for the contract.
+//
+// Parallel notes:
+//  * Files are opened with H5Pset_fapl_mpio on the caller's communicator; metadata writes are
+//    collective (H5Pset_coll_metadata_write). Metadata *reads* stay independent so that the read
+//    functions documented as "any rank" really can be called by one rank alone.
+//  * Raw data of distributed datasets is written with collective transfers (H5FD_MPIO_COLLECTIVE);
+//    a rank with nothing to write still takes part with an empty (H5Sselect_none) selection.
+//  * Argument checks that could fail on one rank only are reduced over the communicator first, so
+//    every rank throws the same error instead of some ranks hanging in a collective call.
+//  * HDF5's automatic error printing is switched off; the innermost entry of its error stack goes
+//    into the exception message instead.
+#include "core/h5.hpp"
+
+#include <fcntl.h>
+#include <unistd.h>
+
+#include <cerrno>
+#include <cstdio>
+#include <cstring>
+#include <filesystem>
+#include <utility>
+
+#include "core/error.hpp"
+
+namespace cgd::h5 {
+namespace {
+
+void silence_hdf5_errors() {
+  static const bool silenced = [] {
+    H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);
+    return true;
+  }();
+  (void)silenced;
+}
+
+herr_t collect_error(unsigned /*n*/, const H5E_error2_t* err, void* client) {
+  auto* entries = static_cast<std::vector<std::string>*>(client);
+  std::string text = err->desc ? err->desc : "";
+  for (char& c : text)
+    if (c == '\n') c = ' ';
+  char minor[160] = "";
+  if (H5Eget_msg(err->min_num, nullptr, minor, sizeof minor) > 0 && text.find(minor) == std::string::npos)
+    text += std::string(text.empty() ? "" : "; ") + minor;
+  entries->push_back(std::move(text));
+  return 0;
+}
+
+/// The innermost (most specific) entry of HDF5's error stack, then clears the stack.
+std::string hdf5_error_text() {
+  std::vector<std::string> entries;
+  H5Ewalk2(H5E_DEFAULT, H5E_WALK_UPWARD, collect_error, &entries);
+  H5Eclear2(H5E_DEFAULT);
+  if (entries.empty() || entries.front().empty()) return "no HDF5 diagnostic";
+  return entries.front();
+}
+
+/// Owns one HDF5 identifier (dataset, dataspace, attribute, type, property list, group, object).
+class Handle {
+ public:
+  using Closer = herr_t (*)(hid_t);
+  Handle() = default;
+  Handle(hid_t id, Closer closer) : id_(id), closer_(closer) {}
+  Handle(Handle&& o) noexcept : id_(std::exchange(o.id_, -1)), closer_(o.closer_) {}
+  Handle& operator=(Handle&& o) noexcept {
+    if (this != &o) {
+      reset();
+      id_ = std::exchange(o.id_, -1);
+      closer_ = o.closer_;
+    }
+    return *this;
+  }
+  Handle(const Handle&) = delete;
+  Handle& operator=(const Handle&) = delete;
+  ~Handle() { reset(); }
+  void reset() {
+    if (id_ >= 0 && closer_) closer_(id_);
+    id_ = -1;
+  }
+  hid_t get() const { return id_; }
+  bool valid() const { return id_ >= 0; }
+
+ private:
+  hid_t id_ = -1;
+  Closer closer_ = nullptr;
+};
+
+std::string normalise(const std::string& path) {
+  if (path.empty()) return "/";
+  return path.front() == '/' ? path : "/" + path;
+}
+
+std::string describe(const std::string& object, const std::string& name) {
+  return "attribute '" + name + "' of '" + normalise(object) + "'";
+}
+
+[[noreturn]] void throw_read(const std::string& file, const std::string& what) {
+  throw InputError(file + ": " + what);
+}
+[[noreturn]] void throw_write(const std::string& file, const std::string& what) {
+  throw RunError(file + ": cannot write " + what + " (" + hdf5_error_text() + ")");
+}
+
+/// True on every rank if `local_bad` is true on any rank of `comm` (collective).
+bool any_rank(MPI_Comm comm, bool local_bad) {
+  int bad = local_bad ? 1 : 0, global = 0;
+  MPI_Allreduce(&bad, &global, 1, MPI_INT, MPI_MAX, comm);
+  return global != 0;
+}
+
+Handle utf8_string_type() {
+  Handle type(H5Tcopy(H5T_C_S1), H5Tclose);
+  H5Tset_size(type.get(), H5T_VARIABLE);
+  H5Tset_cset(type.get(), H5T_CSET_UTF8);
+  return type;
+}
+
+Handle simple_space(const std::vector<hsize_t>& dims) {
+  return Handle(H5Screate_simple(static_cast<int>(dims.size()), dims.data(), nullptr), H5Sclose);
+}
+
+std::uint64_t product(const std::vector<std::uint64_t>& v) {
+  std::uint64_t p = 1;
+  for (auto x : v) p *= x;
+  return p;
+}
+
+Handle collective_transfer() {
+  Handle dxpl(H5Pcreate(H5P_DATASET_XFER), H5Pclose);
+  H5Pset_dxpl_mpio(dxpl.get(), H5FD_MPIO_COLLECTIVE);
+  return dxpl;
+}
+
+// ---- attributes -----------------------------------------------------------------------------------
+
+/// (Re)create attribute `name` on `object` (a group, created on demand, or a dataset) and write it.
+void write_attribute(File& file, const std::string& object, const std::string& name, hid_t file_type,
+                     hid_t mem_type, const std::vector<hsize_t>* dims, const void* data) {
+  const std::string obj_path = normalise(object);
+  if (!file.exists(obj_path)) file.create_group(obj_path);
+  Handle obj(H5Oopen(file.id(), obj_path.c_str(), H5P_DEFAULT), H5Oclose);
+  if (!obj.valid()) throw_write(file.path(), describe(object, name));
+  const htri_t present = H5Aexists(obj.get(), name.c_str());
+  if (present > 0 && H5Adelete(obj.get(), name.c_str()) < 0) throw_write(file.path(), describe(object, name));
+  Handle space = dims ? simple_space(*dims) : Handle(H5Screate(H5S_SCALAR), H5Sclose);
+  Handle attr(H5Acreate2(obj.get(), name.c_str(), file_type, space.get(), H5P_DEFAULT, H5P_DEFAULT), H5Aclose);
+  if (!attr.valid() || H5Awrite(attr.get(), mem_type, data) < 0) throw_write(file.path(), describe(object, name));
+}
+
+struct OpenAttribute {
+  Handle obj, attr, space, type;
+  hssize_t points = 0;
+};
+
+OpenAttribute open_attribute(const File& file, const std::string& object, const std::string& name) {
+  OpenAttribute a;
+  const std::string obj_path = normalise(object);
+  if (!file.exists(obj_path)) throw_read(file.path(), "no object '" + obj_path + "' (looking for attribute '" + name + "')");
+  a.obj = Handle(H5Oopen(file.id(), obj_path.c_str(), H5P_DEFAULT), H5Oclose);
+  if (!a.obj.valid()) throw_read(file.path(), "cannot open '" + obj_path + "' (" + hdf5_error_text() + ")");
+  if (H5Aexists(a.obj.get(), name.c_str()) <= 0) {
+    H5Eclear2(H5E_DEFAULT);
+    throw_read(file.path(), "no " + describe(object, name));
+  }
+  a.attr = Handle(H5Aopen(a.obj.get(), name.c_str(), H5P_DEFAULT), H5Aclose);
+  if (!a.attr.valid()) throw_read(file.path(), "cannot open " + describe(object, name) + " (" + hdf5_error_text() + ")");
+  a.space = Handle(H5Aget_space(a.attr.get()), H5Sclose);
+  a.type = Handle(H5Aget_type(a.attr.get()), H5Tclose);
+  a.points = H5Sget_select_npoints(a.space.get());
+  return a;
+}
+
+template <class T>
+std::vector<T> read_numeric_attribute(const File& file, const std::string& object, const std::string& name,
+                                      hid_t mem_type) {
+  OpenAttribute a = open_attribute(file, object, name);
+  const H5T_class_t cls = H5Tget_class(a.type.get());
+  if (cls != H5T_INTEGER && cls != H5T_FLOAT)
+    throw_read(file.path(), describe(object, name) + " is not numeric");
+  std::vector<T> values(static_cast<std::size_t>(std::max<hssize_t>(a.points, 0)));
+  if (!values.empty() && H5Aread(a.attr.get(), mem_type, values.data()) < 0)
+    throw_read(file.path(), "cannot read " + describe(object, name) + " (" + hdf5_error_text() + ")");
+  return values;
+}
+
+template <class T>
+T read_scalar_attribute(const File& file, const std::string& object, const std::string& name, hid_t mem_type) {
+  std::vector<T> v = read_numeric_attribute<T>(file, object, name, mem_type);
+  if (v.size() != 1)
+    throw_read(file.path(), describe(object, name) + " has " + std::to_string(v.size()) + " values, expected 1");
+  return v.front();
+}
+
+std::vector<std::string> read_string_attribute(const File& file, const std::string& object, const std::string& name) {
+  OpenAttribute a = open_attribute(file, object, name);
+  if (H5Tget_class(a.type.get()) != H5T_STRING) throw_read(file.path(), describe(object, name) + " is not a string");
+  const auto n = static_cast<std::size_t>(std::max<hssize_t>(a.points, 0));
+  std::vector<std::string> out;
+  out.reserve(n);
+  if (H5Tis_variable_str(a.type.get()) > 0) {
+    Handle mem(H5Tcopy(H5T_C_S1), H5Tclose);
+    H5Tset_size(mem.get(), H5T_VARIABLE);
+    H5Tset_cset(mem.get(), H5Tget_cset(a.type.get()));
+    std::vector<char*> ptrs(n, nullptr);
+    if (n > 0 && H5Aread(a.attr.get(), mem.get(), ptrs.data()) < 0)
+      throw_read(file.path(), "cannot read " + describe(object, name) + " (" + hdf5_error_text() + ")");
+    for (char* p : ptrs) out.emplace_back(p ? p : "");
+    if (n > 0) {
+      std::vector<hsize_t> dims{n};
+      Handle space = simple_space(dims);
+      H5Dvlen_reclaim(mem.get(), space.get(), H5P_DEFAULT, ptrs.data());
+    }
+  } else {
+    const std::size_t size = H5Tget_size(a.type.get());
+    Handle mem(H5Tcopy(a.type.get()), H5Tclose);
+    std::vector<char> buffer(n * size + 1, '\0');
+    if (n > 0 && H5Aread(a.attr.get(), mem.get(), buffer.data()) < 0)
+      throw_read(file.path(), "cannot read " + describe(object, name) + " (" + hdf5_error_text() + ")");
+    const bool space_padded = H5Tget_strpad(a.type.get()) == H5T_STR_SPACEPAD;
+    for (std::size_t i = 0; i < n; ++i) {
+      std::string s(buffer.data() + i * size, size);
+      if (auto nul = s.find('\0'); nul != std::string::npos) s.resize(nul);
+      if (space_padded)
+        while (!s.empty() && s.back() == ' ') s.pop_back();
+      out.push_back(std::move(s));
+    }
+  }
+  return out;
+}
+
+// ---- datasets --------------------------------------------------------------------------------------
+
+Handle open_dataset(const File& file, const std::string& name) {
+  const std::string path = normalise(name);
+  if (!file.exists(path)) throw_read(file.path(), "no dataset '" + path + "'");
+  Handle ds(H5Dopen2(file.id(), path.c_str(), H5P_DEFAULT), H5Dclose);
+  if (!ds.valid()) throw_read(file.path(), "cannot open dataset '" + path + "' (" + hdf5_error_text() + ")");
+  return ds;
+}
+
+std::vector<hsize_t> dataset_dims(const Handle& ds) {
+  Handle space(H5Dget_space(ds.get()), H5Sclose);
+  const int rank = H5Sget_simple_extent_ndims(space.get());
+  std::vector<hsize_t> dims(static_cast<std::size_t>(std::max(rank, 0)));
+  if (rank > 0) H5Sget_simple_extent_dims(space.get(), dims.data(), nullptr);
+  return dims;
+}
+
+/// Create `name` with `global_dims` (or open it if it already exists with those dims) and write this
+/// rank's hyperslab [offset, offset + count) from contiguous `local`. Collective.
+void write_hyperslab(File& file, const std::string& name, hid_t mem_type, hid_t file_type,
+                     const std::vector<std::uint64_t>& global_dims, const std::vector<std::uint64_t>& offset,
+                     const std::vector<std::uint64_t>& count, const void* local) {
+  const std::string path = normalise(name);
+  const std::size_t rank = global_dims.size();
+  bool bad = offset.size() != rank || count.size() != rank || rank == 0;
+  for (std::size_t d = 0; !bad && d < rank; ++d) bad = offset[d] + count[d] > global_dims[d];
+  const std::uint64_t points = bad ? 0 : product(count);
+  bad = bad || (points > 0 && local == nullptr);
+  if (any_rank(file.comm(), bad))
+    throw RunError(file.path() + ": cannot write dataset '" + path +
+                   "': a rank's hyperslab (offset/count/data) does not fit the dataset's dimensions");
+
+  const std::vector<hsize_t> dims(global_dims.begin(), global_dims.end());
+  Handle ds;
+  if (file.exists(path)) {
+    ds = Handle(H5Dopen2(file.id(), path.c_str(), H5P_DEFAULT), H5Dclose);
+    if (!ds.valid()) throw_write(file.path(), "dataset '" + path + "'");
+    if (dataset_dims(ds) != dims)
+      throw RunError(file.path() + ": cannot write dataset '" + path + "': it exists with other dimensions");
+  } else {
+    Handle lcpl(H5Pcreate(H5P_LINK_CREATE), H5Pclose);
+    H5Pset_create_intermediate_group(lcpl.get(), 1);
+    Handle space = simple_space(dims);
+    ds = Handle(H5Dcreate2(file.id(), path.c_str(), file_type, space.get(), lcpl.get(), H5P_DEFAULT, H5P_DEFAULT),
+                H5Dclose);
+    if (!ds.valid()) throw_write(file.path(), "dataset '" + path + "' (create)");
+  }
+  if (product(global_dims) == 0) return;  // nothing to transfer on any rank
+
+  Handle file_space(H5Dget_space(ds.get()), H5Sclose);
+  Handle mem_space;
+  if (points == 0) {
+    H5Sselect_none(file_space.get());
+    mem_space = simple_space({1});
+    H5Sselect_none(mem_space.get());
+  } else {
+    const std::vector<hsize_t> start(offset.begin(), offset.end()), extent(count.begin(), count.end());
+    H5Sselect_hyperslab(file_space.get(), H5S_SELECT_SET, start.data(), nullptr, extent.data(), nullptr);
+    mem_space = simple_space(extent);
+  }
+  static const double dummy = 0;  // HDF5 wants a non-null buffer even for an empty selection
+  Handle dxpl = collective_transfer();
+  if (H5Dwrite(ds.get(), mem_type, mem_space.get(), file_space.get(), dxpl.get(), local ? local : &dummy) < 0)
+    throw_write(file.path(), "dataset '" + path + "'");
+}
+
+template <class T>
+void write_rows_impl(File& file, const std::string& name, const T* local, std::int64_t local_rows, int cols,
+                     hid_t mem_type, hid_t file_type) {
+  long long rows = local_rows, total = 0, first = 0;
+  MPI_Allreduce(&rows, &total, 1, MPI_LONG_LONG, MPI_SUM, file.comm());
+  MPI_Exscan(&rows, &first, 1, MPI_LONG_LONG, MPI_SUM, file.comm());
+  int rank = 0;
+  MPI_Comm_rank(file.comm(), &rank);
+  if (rank == 0) first = 0;  // MPI_Exscan leaves rank 0's result undefined
+  if (any_rank(file.comm(), local_rows < 0 || cols < 1))
+    throw RunError(file.path() + ": cannot write dataset '" + normalise(name) + "': negative row count or width < 1");
+  const auto c = static_cast<std::uint64_t>(cols);
+  std::vector<std::uint64_t> dims{static_cast<std::uint64_t>(total)}, offset{static_cast<std::uint64_t>(first)},
+      count{static_cast<std::uint64_t>(rows)};
+  if (cols > 1) {
+    dims.push_back(c);
+    offset.push_back(0);
+    count.push_back(c);
+  }
+  write_hyperslab(file, name, mem_type, file_type, dims, offset, count, local);
+}
+
+template <class T>
+std::vector<T> read_selection(const File& file, const std::string& name, hid_t mem_type,
+                              const std::vector<std::uint64_t>* offset, const std::vector<std::uint64_t>* count) {
+  Handle ds = open_dataset(file, name);
+  const std::vector<hsize_t> dims = dataset_dims(ds);
+  const std::string path = normalise(name);
+  const H5T_class_t cls = [&] {
+    Handle type(H5Dget_type(ds.get()), H5Tclose);
+    return H5Tget_class(type.get());
+  }();
+  if (cls != H5T_INTEGER && cls != H5T_FLOAT) throw_read(file.path(), "dataset '" + path + "' is not numeric");
+  Handle file_space(H5Dget_space(ds.get()), H5Sclose);
+  std::uint64_t points = 1;
+  Handle mem_space;
+  if (offset) {
+    bool bad = offset->size() != dims.size() || count->size() != dims.size();
+    for (std::size_t d = 0; !bad && d < dims.size(); ++d) bad = (*offset)[d] + (*count)[d] > dims[d];
+    if (bad) {
+      std::string shape;
+      for (auto d : dims) {
+        if (!shape.empty()) shape += 'x';
+        shape += std::to_string(d);
+      }
+      throw_read(file.path(), "requested block lies outside dataset '" + path + "' (shape " + shape + ")");
+    }
+    points = product(*count);
+    if (points == 0) return {};
+    const std::vector<hsize_t> start(offset->begin(), offset->end()), extent(count->begin(), count->end());
+    H5Sselect_hyperslab(file_space.get(), H5S_SELECT_SET, start.data(), nullptr, extent.data(), nullptr);
+    mem_space = simple_space(extent);
+  } else {
+    for (auto d : dims) points *= d;
+    if (points == 0) return {};
+    mem_space = simple_space({static_cast<hsize_t>(points)});
+  }
+  std::vector<T> out(points);
+  if (H5Dread(ds.get(), mem_type, mem_space.get(), file_space.get(), H5P_DEFAULT, out.data()) < 0)
+    throw_read(file.path(), "cannot read dataset '" + path + "' (" + hdf5_error_text() + ")");
+  return out;
+}
+
+template <class T>
+std::vector<T> read_rows_impl(const File& file, const std::string& name, std::int64_t first_row, std::int64_t rows,
+                              hid_t mem_type) {
+  const std::vector<std::uint64_t> dims = file.dims(name);
+  if (dims.empty() || dims.size() > 2)
+    throw_read(file.path(), "dataset '" + normalise(name) + "' is not a 1-D or 2-D array of rows");
+  if (first_row < 0 || rows < 0 || static_cast<std::uint64_t>(first_row + rows) > dims[0])
+    throw_read(file.path(), "rows [" + std::to_string(first_row) + ", " + std::to_string(first_row + rows) +
+                                ") outside dataset '" + normalise(name) + "' with " + std::to_string(dims[0]) + " rows");
+  std::vector<std::uint64_t> offset{static_cast<std::uint64_t>(first_row)}, count{static_cast<std::uint64_t>(rows)};
+  if (dims.size() == 2) {
+    offset.push_back(0);
+    count.push_back(dims[1]);
+  }
+  return read_selection<T>(file, name, mem_type, &offset, &count);
+}
+
+template <class T>
+void write_replicated_impl(File& file, const std::string& name, const std::vector<T>& data,
+                           const std::vector<std::uint64_t>& dims, hid_t mem_type, hid_t file_type) {
+  if (any_rank(file.comm(), product(dims) != data.size()))
+    throw RunError(file.path() + ": cannot write dataset '" + normalise(name) + "': " + std::to_string(data.size()) +
+                   " values do not match its dimensions");
+  int rank = 0;
+  MPI_Comm_rank(file.comm(), &rank);
+  const std::vector<std::uint64_t> offset(dims.size(), 0);
+  const std::vector<std::uint64_t> count = rank == 0 ? dims : std::vector<std::uint64_t>(dims.size(), 0);
+  write_hyperslab(file, name, mem_type, file_type, dims, offset, count, data.data());
+}
+
+}  // namespace
+
+// ---- File: lifetime -----------------------------------------------------------------------------------
+
+File File::create(const std::string& path, MPI_Comm comm) {
+  silence_hdf5_errors();
+  Handle fapl(H5Pcreate(H5P_FILE_ACCESS), H5Pclose);
+  H5Pset_fapl_mpio(fapl.get(), comm, MPI_INFO_NULL);
+  H5Pset_coll_metadata_write(fapl.get(), 1);
+  const hid_t id = H5Fcreate(path.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, fapl.get());
+  if (id < 0) throw RunError(path + ": cannot create HDF5 file (" + hdf5_error_text() + ")");
+  return File(id, path, comm);
+}
+
+File File::open_read(const std::string& path, MPI_Comm comm) {
+  silence_hdf5_errors();
+  // Check on rank 0 first and share the verdict, so every rank throws the same clear message.
+  int rank = 0;
+  MPI_Comm_rank(comm, &rank);
+  int verdict = 0;  // 0 ok, 1 missing, 2 not a regular file, 3 unreadable, 4 not HDF5
+  if (rank == 0) {
+    std::error_code ec;
+    const auto status = std::filesystem::status(path, ec);
+    if (!std::filesystem::exists(status))
+      verdict = 1;
+    else if (!std::filesystem::is_regular_file(status))
+      verdict = 2;
+    else if (::access(path.c_str(), R_OK) != 0)
+      verdict = 3;
+    else if (H5Fis_hdf5(path.c_str()) <= 0)
+      verdict = 4;
+    H5Eclear2(H5E_DEFAULT);
+  }
+  MPI_Bcast(&verdict, 1, MPI_INT, 0, comm);
+  static const char* const reasons[] = {"", "no such file", "not a regular file", "permission denied",
+                                        "not an HDF5 file"};
+  if (verdict != 0) throw InputError(path + ": cannot open as HDF5 (" + reasons[verdict] + ")");
+
+  Handle fapl(H5Pcreate(H5P_FILE_ACCESS), H5Pclose);
+  H5Pset_fapl_mpio(fapl.get(), comm, MPI_INFO_NULL);
+  const hid_t id = H5Fopen(path.c_str(), H5F_ACC_RDONLY, fapl.get());
+  if (id < 0) throw InputError(path + ": cannot open as HDF5 (" + hdf5_error_text() + ")");
+  return File(id, path, comm);
+}
+
+File::File(File&& other) noexcept
+    : file_(std::exchange(other.file_, -1)), path_(std::move(other.path_)), comm_(other.comm_) {}
+
+File& File::operator=(File&& other) noexcept {
+  if (this != &other) {
+    if (file_ >= 0) H5Fclose(file_);
+    file_ = std::exchange(other.file_, -1);
+    path_ = std::move(other.path_);
+    comm_ = other.comm_;
+  }
+  return *this;
+}
+
+File::~File() {
+  if (file_ >= 0) {
+    H5Fclose(file_);  // errors cannot be reported from a destructor; close() reports them
+    H5Eclear2(H5E_DEFAULT);
+  }
+}
+
+void File::close() {
+  if (file_ < 0) return;
+  const herr_t status = H5Fclose(file_);
+  file_ = -1;
+  if (status < 0) throw RunError(path_ + ": cannot close HDF5 file (" + hdf5_error_text() + ")");
+}
+
+// ---- File: attributes ---------------------------------------------------------------------------------
+
+void File::set_attr(const std::string& object, const std::string& name, double value) {
+  write_attribute(*this, object, name, H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, nullptr, &value);
+}
+void File::set_attr(const std::string& object, const std::string& name, std::int64_t value) {
+  write_attribute(*this, object, name, H5T_STD_I64LE, H5T_NATIVE_INT64, nullptr, &value);
+}
+void File::set_attr(const std::string& object, const std::string& name, const std::string& value) {
+  Handle type = utf8_string_type();
+  const char* text = value.c_str();
+  write_attribute(*this, object, name, type.get(), type.get(), nullptr, &text);
+}
+void File::set_attr(const std::string& object, const std::string& name, const std::vector<double>& value) {
+  const std::vector<hsize_t> dims{value.size()};
+  write_attribute(*this, object, name, H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, &dims, value.data());
+}
+void File::set_attr(const std::string& object, const std::string& name, const std::vector<std::int64_t>& value) {
+  const std::vector<hsize_t> dims{value.size()};
+  write_attribute(*this, object, name, H5T_STD_I64LE, H5T_NATIVE_INT64, &dims, value.data());
+}
+void File::set_attr(const std::string& object, const std::string& name, const std::vector<std::string>& value) {
+  Handle type = utf8_string_type();
+  std::vector<const char*> texts;
+  texts.reserve(value.size());
+  for (const auto& s : value) texts.push_back(s.c_str());
+  const std::vector<hsize_t> dims{value.size()};
+  write_attribute(*this, object, name, type.get(), type.get(), &dims, texts.data());
+}
+
+double File::attr_double(const std::string& object, const std::string& name) const {
+  return read_scalar_attribute<double>(*this, object, name, H5T_NATIVE_DOUBLE);
+}
+std::int64_t File::attr_int(const std::string& object, const std::string& name) const {
+  return read_scalar_attribute<std::int64_t>(*this, object, name, H5T_NATIVE_INT64);
+}
+std::string File::attr_string(const std::string& object, const std::string& name) const {
+  std::vector<std::string> v = read_string_attribute(*this, object, name);
+  if (v.size() != 1)
+    throw_read(path_, describe(object, name) + " holds " + std::to_string(v.size()) + " strings, expected 1");
+  return v.front();
+}
+std::vector<std::string> File::attr_strings(const std::string& object, const std::string& name) const {
+  return read_string_attribute(*this, object, name);
+}
+std::vector<double> File::attr_doubles(const std::string& object, const std::string& name) const {
+  return read_numeric_attribute<double>(*this, object, name, H5T_NATIVE_DOUBLE);
+}
+std::vector<std::int64_t> File::attr_ints(const std::string& object, const std::string& name) const {
+  return read_numeric_attribute<std::int64_t>(*this, object, name, H5T_NATIVE_INT64);
+}
+
+bool File::has_attr(const std::string& object, const std::string& name) const {
+  const std::string obj_path = normalise(object);
+  if (!exists(obj_path)) return false;
+  const htri_t present = H5Aexists_by_name(file_, obj_path.c_str(), name.c_str(), H5P_DEFAULT);
+  H5Eclear2(H5E_DEFAULT);
+  return present > 0;
+}
+
+// ---- File: groups and datasets ---------------------------------------------------------------------------
+
+bool File::exists(const std::string& path) const {
+  const std::string p = normalise(path);
+  if (p == "/") return true;
+  // H5Lexists fails (rather than answering false) when an intermediate group is missing: walk down.
+  std::size_t pos = 0;
+  while (pos != std::string::npos) {
+    pos = p.find('/', pos + 1);
+    const std::string prefix = p.substr(0, pos);
+    if (prefix.size() <= 1 || prefix.back() == '/') continue;
+    const htri_t r = H5Lexists(file_, prefix.c_str(), H5P_DEFAULT);
+    if (r <= 0) {
+      H5Eclear2(H5E_DEFAULT);
+      return false;
+    }
+  }
+  return true;
+}
+
+void File::create_group(const std::string& path) {
+  const std::string p = normalise(path);
+  if (exists(p)) return;
+  Handle lcpl(H5Pcreate(H5P_LINK_CREATE), H5Pclose);
+  H5Pset_create_intermediate_group(lcpl.get(), 1);
+  Handle group(H5Gcreate2(file_, p.c_str(), lcpl.get(), H5P_DEFAULT, H5P_DEFAULT), H5Gclose);
+  if (!group.valid()) throw_write(path_, "group '" + p + "'");
+}
+
+std::vector<std::uint64_t> File::dims(const std::string& dataset) const {
+  Handle ds = open_dataset(*this, dataset);
+  const std::vector<hsize_t> d = dataset_dims(ds);
+  return {d.begin(), d.end()};
+}
+
+void File::write_rows(const std::string& dataset, const double* local, std::int64_t local_rows, int cols) {
+  write_rows_impl(*this, dataset, local, local_rows, cols, H5T_NATIVE_DOUBLE, H5T_IEEE_F64LE);
+}
+void File::write_rows(const std::string& dataset, const std::int64_t* local, std::int64_t local_rows, int cols) {
+  write_rows_impl(*this, dataset, local, local_rows, cols, H5T_NATIVE_INT64, H5T_STD_I64LE);
+}
+
+std::vector<double> File::read_rows_double(const std::string& dataset, std::int64_t first_row, std::int64_t rows) const {
+  return read_rows_impl<double>(*this, dataset, first_row, rows, H5T_NATIVE_DOUBLE);
+}
+std::vector<std::int64_t> File::read_rows_int(const std::string& dataset, std::int64_t first_row,
+                                              std::int64_t rows) const {
+  return read_rows_impl<std::int64_t>(*this, dataset, first_row, rows, H5T_NATIVE_INT64);
+}
+std::vector<double> File::read_double(const std::string& dataset) const {
+  return read_selection<double>(*this, dataset, H5T_NATIVE_DOUBLE, nullptr, nullptr);
+}
+std::vector<std::int64_t> File::read_int(const std::string& dataset) const {
+  return read_selection<std::int64_t>(*this, dataset, H5T_NATIVE_INT64, nullptr, nullptr);
+}
+
+void File::write_block(const std::string& dataset, const double* local, const std::vector<std::uint64_t>& global_dims,
+                       const std::vector<std::uint64_t>& offset, const std::vector<std::uint64_t>& count) {
+  write_hyperslab(*this, dataset, H5T_NATIVE_DOUBLE, H5T_IEEE_F64LE, global_dims, offset, count, local);
+}
+
+std::vector<double> File::read_block(const std::string& dataset, const std::vector<std::uint64_t>& offset,
+                                     const std::vector<std::uint64_t>& count) const {
+  return read_selection<double>(*this, dataset, H5T_NATIVE_DOUBLE, &offset, &count);
+}
+
+void File::write_replicated(const std::string& dataset, const std::vector<double>& data,
+                            const std::vector<std::uint64_t>& dims) {
+  write_replicated_impl(*this, dataset, data, dims, H5T_NATIVE_DOUBLE, H5T_IEEE_F64LE);
+}
+void File::write_replicated(const std::string& dataset, const std::vector<std::int64_t>& data,
+                            const std::vector<std::uint64_t>& dims) {
+  write_replicated_impl(*this, dataset, data, dims, H5T_NATIVE_INT64, H5T_STD_I64LE);
+}
+
+// ---- free functions ----------------------------------------------------------------------------------------
+
+void write_atomically(const std::string& final_path, MPI_Comm comm, const std::function<void(File&)>& body) {
+  const std::string tmp_path = final_path + ".tmp";
+  int rank = 0;
+  MPI_Comm_rank(comm, &rank);
+  try {
+    File file = File::create(tmp_path, comm);
+    body(file);
+    file.close();
+  } catch (...) {
+    // The File's destructor has closed the file on every rank (the body's errors are collective).
+    if (rank == 0) std::remove(tmp_path.c_str());
+    throw;
+  }
+  int error = 0;
+  if (rank == 0) {
+    // Data on disk before the name appears: fsync the file, rename, then fsync the folder.
+    if (const int fd = ::open(tmp_path.c_str(), O_RDONLY); fd >= 0) {
+      if (::fsync(fd) != 0) error = errno;
+      ::close(fd);
+    } else {
+      error = errno;
+    }
+    if (error == 0 && std::rename(tmp_path.c_str(), final_path.c_str()) != 0) error = errno;
+    if (error == 0) {
+      const std::filesystem::path folder = std::filesystem::path(final_path).parent_path();
+      if (const int dfd = ::open(folder.empty() ? "." : folder.c_str(), O_RDONLY | O_DIRECTORY); dfd >= 0) {
+        ::fsync(dfd);
+        ::close(dfd);
+      }
+    } else {
+      std::remove(tmp_path.c_str());
+    }
+  }
+  MPI_Bcast(&error, 1, MPI_INT, 0, comm);
+  MPI_Barrier(comm);
+  if (error != 0)
+    throw RunError(final_path + ": cannot move the completed file into place (" + std::strerror(error) + ")");
+}
+
+bool is_hdf5(const std::string& path) {
+  silence_hdf5_errors();
+  std::error_code ec;
+  if (!std::filesystem::is_regular_file(path, ec)) return false;
+  const htri_t r = H5Fis_hdf5(path.c_str());
+  H5Eclear2(H5E_DEFAULT);
+  return r > 0;
+}
+
+}  // namespace cgd::h5

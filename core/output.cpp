@@ -1,0 +1,339 @@
+// cgd::schema — the file schema of design.md ("Files (HDF5 schema, version 1)"): common root
+// attributes and /params, snapshots, and the time series. run.xmf is written by core/xdmf.cpp.
+#include "core/output.hpp"
+
+#include <algorithm>
+#include <array>
+#include <cstring>
+#include <ctime>
+#include <stdexcept>
+
+#include "core/error.hpp"
+
+#ifndef CGD_VERSION
+#define CGD_VERSION "unknown"
+#endif
+
+namespace cgd::schema {
+namespace {
+
+std::vector<double> as_vector(const Vec3& v) { return {v.begin(), v.end()}; }
+std::vector<std::int64_t> as_vector(const std::array<int, 3>& v) { return {v.begin(), v.end()}; }
+
+/// UTC now as ISO 8601 ("2025-01-31T12:00:00Z"), taken on rank 0 so every rank writes the same text.
+std::string utc_now_iso8601(MPI_Comm comm) {
+  char text[32] = {};
+  int rank = 0;
+  MPI_Comm_rank(comm, &rank);
+  if (rank == 0) {
+    const std::time_t now = std::time(nullptr);
+    std::tm utc{};
+    gmtime_r(&now, &utc);
+    std::strftime(text, sizeof text, "%Y-%m-%dT%H:%M:%SZ", &utc);
+  }
+  MPI_Bcast(text, sizeof text, MPI_CHAR, 0, comm);
+  text[sizeof text - 1] = '\0';
+  return text;
+}
+
+/// Every field of the scene's config structs and of DerivedScales, SI, the unit in the name.
+/// Keep in step with core/scene.hpp: a field added there belongs here too.
+void write_params(h5::File& f, const Scene& s) {
+  const std::string g = "/params";
+  auto flag = [](bool b) { return std::int64_t{b ? 1 : 0}; };
+  f.create_group(g);
+  f.set_attr(g, "scene_name", s.name);
+  f.set_attr(g, "scene_path", s.source_path);
+  // effects that are on
+  f.set_attr(g, "has_contacts", flag(s.has_contacts()));
+  f.set_attr(g, "has_friction", flag(s.has_friction()));
+  f.set_attr(g, "has_fluid", flag(s.fluid.has_value()));
+  f.set_attr(g, "solves_fluid", flag(s.solves_fluid()));
+
+  // [domain]
+  f.set_attr(g, "box_size_m", as_vector(s.domain.size_m));
+  f.set_attr(g, "gravity_m_s2", as_vector(s.domain.gravity_m_s2));
+
+  // [particles]
+  const ParticlesConfig& p = s.particles;
+  f.set_attr(g, "diameter_m", p.diameter_m);
+  f.set_attr(g, "density_kg_m3", p.density_kg_m3);
+  f.set_attr(g, "solids_fraction", p.solids_fraction);
+  f.set_attr(g, "parcel_size", p.parcel_size);
+  f.set_attr(g, "velocity_rms_m_s", p.velocity_rms_m_s);
+  f.set_attr(g, "seed", static_cast<std::int64_t>(p.seed));
+
+  // [contact]
+  const ContactConfig& c = s.contact;
+  f.set_attr(g, "contact_model", std::string(to_string(c.model)));
+  if (c.gamma_star) f.set_attr(g, "gamma_star", *c.gamma_star);
+  if (c.stiffness_n_N_m) f.set_attr(g, "stiffness_n_N_m", *c.stiffness_n_N_m);
+  f.set_attr(g, "t_star", c.t_star);
+  f.set_attr(g, "restitution", c.restitution);
+  f.set_attr(g, "friction", c.friction);
+  f.set_attr(g, "kn_over_kt", c.kn_over_kt);
+  f.set_attr(g, "gamman_over_gammat", c.gamman_over_gammat);
+  f.set_attr(g, "skin_over_dp", c.skin_over_dp);
+
+  // [fluid] (absent: dry granular run)
+  if (s.fluid) {
+    const FluidConfig& fl = *s.fluid;
+    f.set_attr(g, "fluid_density_kg_m3", fl.density_kg_m3);
+    f.set_attr(g, "fluid_viscosity_Pa_s", fl.viscosity_Pa_s);
+    f.set_attr(g, "fluid_cells", as_vector(fl.cells));
+    f.set_attr(g, "courant", fl.courant);
+    f.set_attr(g, "coupling", std::string(to_string(fl.coupling)));
+    f.set_attr(g, "drag", std::string(to_string(fl.drag)));
+    f.set_attr(g, "pressure_gradient_force", flag(fl.pressure_gradient_force));
+  }
+
+  // [run]
+  const RunConfig& r = s.run;
+  f.set_attr(g, "end_time_s", r.end_time_s);
+  f.set_attr(g, "dump_interval_s", r.dump_interval_s);
+  f.set_attr(g, "series_interval_s", r.series_interval_s);
+  f.set_attr(g, "checkpoint_wall_s", r.checkpoint_wall_s);
+  if (r.dt_s) f.set_attr(g, "dt_s", *r.dt_s);
+
+  // derived scales
+  const DerivedScales& d = s.derived;
+  f.set_attr(g, "particle_volume_m3", d.particle_volume_m3);
+  f.set_attr(g, "particle_mass_kg", d.particle_mass_kg);
+  f.set_attr(g, "parcel_diameter_m", d.parcel_diameter_m);
+  f.set_attr(g, "parcel_mass_kg", d.parcel_mass_kg);
+  f.set_attr(g, "u_t_m_s", d.u_t_m_s);
+  f.set_attr(g, "re_p", d.re_p);
+  f.set_attr(g, "fr_p", d.fr_p);
+  f.set_attr(g, "l_ref_m", d.l_ref_m);
+  f.set_attr(g, "l_char_m", d.l_char_m);
+  f.set_attr(g, "t_ref_s", d.t_ref_s);
+  f.set_attr(g, "stokes_relaxation_s", d.stokes_relaxation_s);
+  f.set_attr(g, "k_n_N_m", d.k_n_N_m);
+  f.set_attr(g, "k_t_N_m", d.k_t_N_m);
+  f.set_attr(g, "gamma_n_kg_s", d.gamma_n_kg_s);
+  f.set_attr(g, "gamma_t_kg_s", d.gamma_t_kg_s);
+  f.set_attr(g, "t_c_s", d.t_c_s);
+  f.set_attr(g, "dt_dem_s", d.dt_dem_s);
+  f.set_attr(g, "dt_fluid_s", d.dt_fluid_s);
+  f.set_attr(g, "cells", as_vector(d.cells));
+  f.set_attr(g, "particle_count", d.particle_count);
+  f.set_attr(g, "memory_estimate_bytes", d.memory_estimate_bytes);
+}
+
+/// One per-particle array of the snapshot: name, data, values per particle, unit.
+struct ParticleArray {
+  const char* name;
+  const double* data;
+  int width;
+  const char* unit;
+  bool required;
+};
+
+}  // namespace
+
+void write_common(h5::File& file, const char* format, const Scene& scene) {
+  file.set_attr("/", "cgd_format", std::string(format));
+  file.set_attr("/", "cgd_format_version", kFormatVersion);
+  file.set_attr("/", "code_version", std::string(CGD_VERSION));
+  file.set_attr("/", "created", utc_now_iso8601(file.comm()));
+  file.set_attr("/", "scene", scene.effective_toml);
+  write_params(file, scene);
+}
+
+void write_snapshot(const std::string& path, MPI_Comm comm, const Scene& scene, double time_s, std::int64_t step,
+                    const ParticleFields& particles, const FluidFields* fluid) {
+  const ParticleArray arrays[] = {
+      {"position", particles.position, 3, "m", true},
+      {"velocity", particles.velocity, 3, "m/s", true},
+      {"angular_velocity", particles.angular_velocity, 3, "rad/s", false},
+      {"diameter", particles.diameter, 1, "m", true},
+      {"drag_coefficient", particles.drag_coefficient, 1, "kg/(m^3 s)", false},
+      {"fluid_velocity", particles.fluid_velocity, 3, "m/s", false},
+      {"pressure_gradient", particles.pressure_gradient, 3, "Pa/m", false},
+  };
+  constexpr int kArrays = std::size(arrays);
+
+  // Which optional arrays are present, agreed over all ranks (a rank without particles may pass
+  // nullptr); an array given on some ranks but missing on a rank that has particles is a bug.
+  const bool has_rows = particles.count > 0;
+  std::array<int, 2 * kArrays + 6> local{}, global{};
+  for (int i = 0; i < kArrays; ++i) {
+    local[2 * i] = arrays[i].data != nullptr;
+    local[2 * i + 1] = arrays[i].data == nullptr && has_rows;
+  }
+  local[2 * kArrays] = particles.id == nullptr && has_rows;
+  local[2 * kArrays + 1] = particles.count < 0;
+  local[2 * kArrays + 2] = fluid != nullptr;
+  local[2 * kArrays + 3] = fluid == nullptr;
+  bool bad_slab = false;
+  if (fluid) {
+    const auto& n = fluid->cells;
+    bad_slab = n[0] <= 0 || n[1] <= 0 || n[2] <= 0 || fluid->y_offset < 0 || fluid->y_count < 0 ||
+               fluid->y_offset + fluid->y_count > n[1] ||
+               (fluid->y_count > 0 && (!fluid->void_fraction || !fluid->velocity || !fluid->pressure));
+  }
+  local[2 * kArrays + 4] = bad_slab;
+  local[2 * kArrays + 5] = fluid ? fluid->cells[1] : 0;
+  MPI_Allreduce(local.data(), global.data(), static_cast<int>(local.size()), MPI_INT, MPI_MAX, comm);
+
+  std::string problem;
+  for (int i = 0; i < kArrays; ++i) {
+    const bool any_given = global[2 * i], missing_somewhere = global[2 * i + 1];
+    if (missing_somewhere && (arrays[i].required || any_given))
+      problem = std::string("particle array '") + arrays[i].name + "' is missing on a rank that owns particles";
+  }
+  if (global[2 * kArrays]) problem = "particle array 'id' is missing on a rank that owns particles";
+  if (global[2 * kArrays + 1]) problem = "negative particle count";
+  const bool with_fluid = global[2 * kArrays + 2];
+  if (with_fluid && global[2 * kArrays + 3]) problem = "fluid fields given on some ranks only";
+  if (global[2 * kArrays + 4]) problem = "a rank's fluid slab lies outside the grid or lacks a field";
+  if (with_fluid && problem.empty()) {
+    int y_cells = fluid->y_count, y_total = 0;
+    MPI_Allreduce(&y_cells, &y_total, 1, MPI_INT, MPI_SUM, comm);
+    if (y_total != global[2 * kArrays + 5])
+      problem = "the ranks' fluid slabs hold " + std::to_string(y_total) + " layers along y, the grid has " +
+                std::to_string(global[2 * kArrays + 5]);
+  }
+  if (!problem.empty()) throw RunError(path + ": cannot write snapshot: " + problem);
+
+  h5::write_atomically(path, comm, [&](h5::File& f) {
+    write_common(f, "snapshot", scene);
+    f.set_attr("/", "time", time_s);
+    f.set_attr("/", "step", step);
+
+    f.create_group("/particles");
+    f.write_rows("/particles/id", particles.id, particles.count, 1);
+    f.set_attr("/particles/id", "unit", std::string("1"));
+    for (int i = 0; i < kArrays; ++i) {
+      if (!global[2 * i]) continue;  // not simulated
+      const std::string name = std::string("/particles/") + arrays[i].name;
+      f.write_rows(name, arrays[i].data, particles.count, arrays[i].width);
+      f.set_attr(name, "unit", std::string(arrays[i].unit));
+    }
+    const bool wrote_pressure_gradient = std::any_of(std::begin(arrays), std::end(arrays), [&](const ParticleArray& a) {
+      return std::strcmp(a.name, "pressure_gradient") == 0 && global[2 * (&a - arrays)];
+    });
+    if (wrote_pressure_gradient)  // record the mean that was removed from it
+      f.set_attr("/particles", "pressure_gradient_mean", as_vector(particles.pressure_gradient_mean));
+
+    if (with_fluid) {
+      const auto n = fluid->cells;  // (n_x, n_y, n_z)
+      const auto nx = static_cast<std::uint64_t>(n[0]), ny = static_cast<std::uint64_t>(n[1]),
+                 nz = static_cast<std::uint64_t>(n[2]);
+      const auto y0 = static_cast<std::uint64_t>(fluid->y_offset), yc = static_cast<std::uint64_t>(fluid->y_count);
+      f.create_group("/fluid");
+      f.set_attr("/fluid", "cells", as_vector(fluid->cells));
+      f.set_attr("/fluid", "spacing", as_vector(fluid->spacing_m));
+      f.set_attr("/fluid", "origin", as_vector(fluid->origin_m));
+      f.set_attr("/fluid", "layout", std::string("arrays (n_z, n_y, n_x[, 3]), x fastest; cells, spacing, origin as (x, y, z)"));
+      f.write_block("/fluid/void_fraction", fluid->void_fraction, {nz, ny, nx}, {0, y0, 0}, {nz, yc, nx});
+      f.set_attr("/fluid/void_fraction", "unit", std::string("1"));
+      f.write_block("/fluid/velocity", fluid->velocity, {nz, ny, nx, 3}, {0, y0, 0, 0}, {nz, yc, nx, 3});
+      f.set_attr("/fluid/velocity", "unit", std::string("m/s"));
+      f.write_block("/fluid/pressure", fluid->pressure, {nz, ny, nx}, {0, y0, 0}, {nz, yc, nx});
+      f.set_attr("/fluid/pressure", "unit", std::string("Pa"));
+    }
+  });
+}
+
+// ---- Series ---------------------------------------------------------------------------------------------
+
+void Series::add_column(const std::string& name, int width, const std::string& unit) {
+  if (rows_ > 0) throw std::logic_error("Series::add_column('" + name + "') after rows were appended");
+  if (name.empty() || name.find('/') != std::string::npos || width < 1)
+    throw std::invalid_argument("Series::add_column: bad column '" + name + "' of width " + std::to_string(width));
+  for (const Column& c : columns_)
+    if (c.name == name) throw std::invalid_argument("Series::add_column: column '" + name + "' declared twice");
+  columns_.push_back(Column{name, unit, width, {}});
+}
+
+int Series::row_width() const {
+  int width = 0;
+  for (const Column& c : columns_) width += c.width;
+  return width;
+}
+
+void Series::append(const std::vector<double>& row) {
+  if (columns_.empty()) throw std::logic_error("Series::append before any column was declared");
+  if (static_cast<int>(row.size()) != row_width())
+    throw std::invalid_argument("Series::append: row of " + std::to_string(row.size()) + " values, expected " +
+                                std::to_string(row_width()));
+  auto it = row.begin();
+  for (Column& c : columns_) {
+    c.values.insert(c.values.end(), it, it + c.width);
+    it += c.width;
+  }
+  ++rows_;
+}
+
+void Series::truncate_after(double time_s) {
+  if (columns_.empty() || rows_ == 0) return;
+  const std::vector<double>& time = columns_.front().values;  // column 0 is time (width 1)
+  const int time_width = columns_.front().width;
+  std::vector<bool> keep(rows_);
+  std::size_t kept = 0;
+  for (std::size_t r = 0; r < rows_; ++r) kept += (keep[r] = time[r * time_width] <= time_s);
+  for (Column& c : columns_) {
+    std::vector<double> values;
+    values.reserve(kept * c.width);
+    for (std::size_t r = 0; r < rows_; ++r)
+      if (keep[r]) values.insert(values.end(), c.values.begin() + r * c.width, c.values.begin() + (r + 1) * c.width);
+    c.values = std::move(values);
+  }
+  rows_ = kept;
+}
+
+const std::vector<double>& Series::column(const std::string& name) const {
+  std::string names;
+  for (const Column& c : columns_) {
+    if (c.name == name) return c.values;
+    names += (names.empty() ? "" : ", ") + c.name;
+  }
+  throw InputError("series: no column '" + name + "' (columns: " + names + ")");
+}
+
+void Series::write(const std::string& path, MPI_Comm comm, const Scene& scene) const {
+  h5::write_atomically(path, comm, [&](h5::File& f) {
+    write_common(f, "series", scene);
+    std::vector<std::string> names;
+    for (const Column& c : columns_) names.push_back(c.name);
+    f.set_attr("/", "columns", names);
+    f.set_attr("/", "rows", static_cast<std::int64_t>(rows_));
+    for (const Column& c : columns_) {
+      const std::string dataset = "/" + c.name;
+      std::vector<std::uint64_t> dims{rows_};
+      if (c.width > 1) dims.push_back(static_cast<std::uint64_t>(c.width));
+      f.write_replicated(dataset, c.values, dims);
+      f.set_attr(dataset, "unit", c.unit);
+    }
+  });
+}
+
+Series Series::read(const std::string& path, MPI_Comm comm) {
+  h5::File f = h5::File::open_read(path, comm);
+  const std::string format = f.has_attr("/", "cgd_format") ? f.attr_string("/", "cgd_format") : "";
+  if (format != "series")
+    throw InputError(path + ": not a cgd series file (cgd_format = '" + format + "', expected 'series')");
+  Series s;
+  for (const std::string& name : f.attr_strings("/", "columns")) {
+    const std::string dataset = "/" + name;
+    const std::vector<std::uint64_t> dims = f.dims(dataset);
+    if (dims.empty() || dims.size() > 2)
+      throw InputError(path + ": series column '" + name + "' is not a 1-D or 2-D array");
+    Column c;
+    c.name = name;
+    c.width = dims.size() == 2 ? static_cast<int>(dims[1]) : 1;
+    c.unit = f.has_attr(dataset, "unit") ? f.attr_string(dataset, "unit") : "";
+    c.values = f.read_double(dataset);
+    if (s.columns_.empty())
+      s.rows_ = dims[0];
+    else if (dims[0] != s.rows_)
+      throw InputError(path + ": series column '" + name + "' has " + std::to_string(dims[0]) + " rows, '" +
+                       s.columns_.front().name + "' has " + std::to_string(s.rows_));
+    s.columns_.push_back(std::move(c));
+  }
+  f.close();
+  return s;
+}
+
+}  // namespace cgd::schema

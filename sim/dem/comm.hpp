@@ -1,0 +1,73 @@
+#pragma once
+// Slab decomposition along y (design.md "Parallel runs") and the ghost-particle exchange.
+// Every rank owns the particles whose y lies in [y_lo, y_hi). Ghosts are built in three stages,
+// x, z, then y, each stage taking as candidates everything that exists before it (owned + earlier
+// ghosts), so edge and corner images come out right. x and z are always local periodic images; y goes
+// to the neighbouring ranks (or is a local image with one rank). Between rebuilds `forward` refreshes
+// the ghosts from their sources with the same periodic shifts, in the same order.
+#include <mpi.h>
+
+#include <array>
+#include <cstdint>
+#include <vector>
+
+#include "sim/dem/particles.hpp"
+
+namespace cgd::dem {
+
+class SlabDecomposition {
+ public:
+  SlabDecomposition(MPI_Comm comm, std::array<double, 3> box_m);
+
+  MPI_Comm comm() const { return comm_; }
+  int rank() const { return rank_; }
+  int size() const { return size_; }
+  int down() const { return (rank_ + size_ - 1) % size_; }
+  int up() const { return (rank_ + 1) % size_; }
+  const std::array<double, 3>& box() const { return box_; }
+  /// Lower y bound of rank r's slab (r = size gives the box height). Same arithmetic everywhere.
+  double slab_lo(int r) const { return r == size_ ? box_[1] : box_[1] * r / size_; }
+  double y_lo() const { return slab_lo(rank_); }
+  double y_hi() const { return slab_lo(rank_ + 1); }
+  /// The rank owning height y (y already wrapped into [0, L_y)).
+  int owner(double y) const;
+  /// Wrap a position into [0, L) in every dimension.
+  void wrap(double* x) const;
+
+ private:
+  MPI_Comm comm_;
+  int rank_ = 0, size_ = 1;
+  std::array<double, 3> box_;
+};
+
+class GhostExchange {
+ public:
+  explicit GhostExchange(const SlabDecomposition& slabs) : slabs_(slabs) {}
+
+  /// Discard old ghosts and create the ghosts within `cutoff` of every face of the owned region.
+  void build(Particles& p, double cutoff);
+  /// Refresh ghost positions and velocities (and angular velocities) from their sources.
+  void forward(Particles& p);
+  /// Move owned particles whose (wrapped) y lies outside this slab to the owning rank, with their
+  /// contact records. Ghosts are dropped. Throws RunError if a particle skipped a whole slab.
+  void migrate(Particles& p, ContactStore& store);
+  /// Number of ghosts of the last build.
+  std::size_t ghosts() const { return ghosts_; }
+
+ private:
+  struct Swap {
+    int dim = 0;
+    int peer_send = 0, peer_recv = 0;  // ranks; == own rank for a local periodic image
+    bool local = true;
+    std::array<double, 3> shift{};     // added to the position of every sent particle
+    std::vector<std::int32_t> send;    // local indices of the sources
+    std::size_t recv_first = 0, recv_count = 0;
+  };
+  void pack(const Particles& p, const Swap& s, std::vector<double>& buf) const;
+  const SlabDecomposition& slabs_;
+  std::vector<Swap> swaps_;
+  std::vector<double> send_buf_, recv_buf_;
+  std::size_t ghosts_ = 0;
+};
+
+}  // namespace cgd::dem

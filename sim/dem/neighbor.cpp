@@ -1,0 +1,158 @@
+#include "sim/dem/neighbor.hpp"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <limits>
+
+namespace cgd::dem {
+
+namespace {
+
+struct Grid {
+  std::array<double, 3> lo{}, inv{};
+  std::array<int, 3> n{};
+  int cell(const double* x) const {
+    int c[3];
+    for (int d = 0; d < 3; ++d) c[d] = std::clamp(static_cast<int>((x[d] - lo[d]) * inv[d]), 0, n[d] - 1);
+    return (c[2] * n[1] + c[1]) * n[0] + c[0];
+  }
+  std::size_t count() const { return static_cast<std::size_t>(n[0]) * n[1] * n[2]; }
+};
+
+Grid make_grid(const Particles& p, std::size_t count, double cell_size) {
+  Grid g;
+  std::array<double, 3> hi{};
+  for (int d = 0; d < 3; ++d) {
+    g.lo[d] = std::numeric_limits<double>::max();
+    hi[d] = std::numeric_limits<double>::lowest();
+  }
+  for (std::size_t i = 0; i < count; ++i)
+    for (int d = 0; d < 3; ++d) {
+      g.lo[d] = std::min(g.lo[d], p.x[3 * i + d]);
+      hi[d] = std::max(hi[d], p.x[3 * i + d]);
+    }
+  for (int d = 0; d < 3; ++d) {
+    if (count == 0) g.lo[d] = hi[d] = 0.0;
+    const double extent = hi[d] - g.lo[d];
+    g.n[d] = std::max(1, static_cast<int>(std::floor(extent / cell_size)));
+    // Keep the cell count bounded (a pathological spread would otherwise allocate without limit).
+    g.n[d] = std::min(g.n[d], 4096);
+    g.inv[d] = extent > 0 ? g.n[d] / extent : 0.0;
+  }
+  return g;
+}
+
+}  // namespace
+
+void NeighborList::build(const Particles& p, double cutoff, bool with_history) {
+  const Grid g = make_grid(p, p.n_total, cutoff);
+  const std::size_t ncell = g.count();
+  // counting sort of all particles (owned + ghosts) into cells
+  cell_start_.assign(ncell + 1, 0);
+  cell_of_.resize(p.n_total);
+  for (std::size_t i = 0; i < p.n_total; ++i) {
+    cell_of_[i] = g.cell(&p.x[3 * i]);
+    ++cell_start_[cell_of_[i] + 1];
+  }
+  for (std::size_t c = 0; c < ncell; ++c) cell_start_[c + 1] += cell_start_[c];
+  cell_items_.resize(p.n_total);
+  {
+    std::vector<std::int32_t> fill(cell_start_.begin(), cell_start_.end() - 1);
+    for (std::size_t i = 0; i < p.n_total; ++i) cell_items_[fill[cell_of_[i]]++] = static_cast<std::int32_t>(i);
+  }
+  const double cut2 = cutoff * cutoff;
+  offset.resize(p.n_owned + 1);
+  index.clear();
+  offset[0] = 0;
+  for (std::size_t i = 0; i < p.n_owned; ++i) {
+    const double* xi_ = &p.x[3 * i];
+    const int c = cell_of_[i];
+    const int cx = c % g.n[0], cy = (c / g.n[0]) % g.n[1], cz = c / (g.n[0] * g.n[1]);
+    const std::size_t first = index.size();
+    for (int dz = -1; dz <= 1; ++dz) {
+      const int z = cz + dz;
+      if (z < 0 || z >= g.n[2]) continue;
+      for (int dy = -1; dy <= 1; ++dy) {
+        const int y = cy + dy;
+        if (y < 0 || y >= g.n[1]) continue;
+        for (int dx = -1; dx <= 1; ++dx) {
+          const int x = cx + dx;
+          if (x < 0 || x >= g.n[0]) continue;
+          const int cc = (z * g.n[1] + y) * g.n[0] + x;
+          for (std::int32_t k = cell_start_[cc]; k < cell_start_[cc + 1]; ++k) {
+            const std::int32_t j = cell_items_[k];
+            if (static_cast<std::size_t>(j) == i) continue;
+            const double* xj = &p.x[3 * j];
+            const double ddx = xi_[0] - xj[0], ddy = xi_[1] - xj[1], ddz = xi_[2] - xj[2];
+            if (ddx * ddx + ddy * ddy + ddz * ddz < cut2) index.push_back(j);
+          }
+        }
+      }
+    }
+    // canonical order: by partner id (see header)
+    std::sort(index.begin() + static_cast<std::ptrdiff_t>(first), index.end(),
+              [&](std::int32_t a, std::int32_t b) { return p.id[a] < p.id[b]; });
+    offset[i + 1] = static_cast<std::int64_t>(index.size());
+  }
+  if (with_history) xi.assign(3 * index.size(), 0.0);
+  else xi.clear();
+}
+
+void NeighborList::save_history(const Particles& p, ContactStore& store) const {
+  store.clear();
+  store.offset.reserve(p.n_owned + 1);
+  for (std::size_t i = 0; i < p.n_owned; ++i) {
+    if (!xi.empty()) {
+      for (std::int64_t k = offset[i]; k < offset[i + 1]; ++k) {
+        const double* s = &xi[3 * k];
+        if (s[0] != 0.0 || s[1] != 0.0 || s[2] != 0.0) {
+          store.partner.push_back(p.id[index[k]]);
+          store.xi.insert(store.xi.end(), s, s + 3);
+        }
+      }
+    }
+    store.offset.push_back(static_cast<std::int64_t>(store.partner.size()));
+  }
+}
+
+void NeighborList::load_history(const Particles& p, const ContactStore& store) {
+  if (xi.empty() || store.offset.size() != p.n_owned + 1) return;
+  for (std::size_t i = 0; i < p.n_owned; ++i) {
+    for (std::int64_t s = store.offset[i]; s < store.offset[i + 1]; ++s) {
+      // neighbours are sorted by id: binary search the partner
+      const auto begin = index.begin() + offset[i], end = index.begin() + offset[i + 1];
+      const auto it = std::lower_bound(begin, end, store.partner[s],
+                                       [&](std::int32_t j, std::int64_t id) { return p.id[j] < id; });
+      // A stored contact is always within the cutoff, so it is found; if not (it cannot touch
+      // before the next rebuild either) the record is dropped.
+      if (it != end && p.id[*it] == store.partner[s]) {
+        const std::size_t k = static_cast<std::size_t>(it - index.begin());
+        xi[3 * k] = store.xi[3 * s];
+        xi[3 * k + 1] = store.xi[3 * s + 1];
+        xi[3 * k + 2] = store.xi[3 * s + 2];
+      }
+    }
+  }
+}
+
+std::size_t NeighborList::bytes() const {
+  return offset.capacity() * sizeof(std::int64_t) + index.capacity() * sizeof(std::int32_t) +
+         xi.capacity() * sizeof(double) +
+         (cell_start_.capacity() + cell_items_.capacity() + cell_of_.capacity()) * sizeof(std::int32_t);
+}
+
+std::vector<std::int32_t> spatial_order(const Particles& p, double cell_size) {
+  const Grid g = make_grid(p, p.n_owned, cell_size);
+  std::vector<std::int32_t> start(g.count() + 1, 0), cell(p.n_owned);
+  for (std::size_t i = 0; i < p.n_owned; ++i) {
+    cell[i] = g.cell(&p.x[3 * i]);
+    ++start[cell[i] + 1];
+  }
+  for (std::size_t c = 0; c + 1 < start.size(); ++c) start[c + 1] += start[c];
+  std::vector<std::int32_t> order(p.n_owned);
+  for (std::size_t i = 0; i < p.n_owned; ++i) order[start[cell[i]]++] = static_cast<std::int32_t>(i);
+  return order;
+}
+
+}  // namespace cgd::dem

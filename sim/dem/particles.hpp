@@ -1,0 +1,65 @@
+#pragma once
+// Particle data of one rank as a structure of arrays (vectors interleaved xyz).
+// Layout: owned particles [0, n_owned), then ghosts [n_owned, n_total) (periodic images and copies of
+// neighbouring ranks' particles, refreshed every step). The kinematic state is double-buffered: the
+// fused force+integration pass reads (x, v, w) at step n and writes the next step into (x_next,
+// v_next, w_next); `swap_buffers` then makes the new state current. Velocities are the leapfrog
+// half-step velocities v_{n-1/2}; the synchronous v_n = (v_{n-1/2} + v_{n+1/2})/2 is formed for output.
+#include <cstddef>
+#include <cstdint>
+#include <vector>
+
+namespace cgd::dem {
+
+struct Particles {
+  std::size_t n_owned = 0;
+  std::size_t n_total = 0;  // owned + ghosts
+  bool rotation = false;    // angular velocity is simulated (friction > 0)
+
+  std::vector<std::int64_t> id;  // global id, n_total
+  std::vector<double> x, v, w;   // current state, 3 * n_total (w empty without rotation)
+  std::vector<double> x_next, v_next, w_next;  // next state, 3 * n_owned used
+
+  /// Resize for `owned` particles plus room for `total - owned` ghosts; keeps existing data.
+  void resize(std::size_t owned, std::size_t total) {
+    n_owned = owned;
+    n_total = total;
+    id.resize(total);
+    x.resize(3 * total);
+    v.resize(3 * total);
+    x_next.resize(3 * total);
+    v_next.resize(3 * total);
+    if (rotation) {
+      w.resize(3 * total);
+      w_next.resize(3 * total);
+    }
+  }
+  void swap_buffers() {
+    x.swap(x_next);
+    v.swap(v_next);
+    if (rotation) w.swap(w_next);
+  }
+  std::size_t bytes() const {
+    return id.capacity() * sizeof(std::int64_t) +
+           (x.capacity() + v.capacity() + w.capacity() + x_next.capacity() + v_next.capacity() +
+            w_next.capacity()) * sizeof(double);
+  }
+};
+
+/// Contact history of owned particles keyed by partner id, in CSR form: the record that carries
+/// the tangential spring across neighbour-list rebuilds, migration between ranks and restart.
+/// Entry k of particle i: partner id `partner[k]`, spring xi[3k..3k+2] as seen from i.
+struct ContactStore {
+  std::vector<std::int64_t> offset{0};  // n_owned + 1
+  std::vector<std::int64_t> partner;
+  std::vector<double> xi;
+
+  std::size_t contacts() const { return partner.size(); }
+  void clear() {
+    offset.assign(1, 0);
+    partner.clear();
+    xi.clear();
+  }
+};
+
+}  // namespace cgd::dem

@@ -1,0 +1,260 @@
+#include "sim/dem/system.hpp"
+
+#include <cmath>
+#include <cstring>
+#include <sstream>
+
+#include "core/error.hpp"
+
+namespace cgd::dem {
+
+DemSystem::DemSystem(const DemSettings& settings, MPI_Comm comm)
+    : s_(settings), slabs_(comm, settings.box_m), ghosts_(slabs_) {
+  p_.rotation = s_.contacts && s_.friction;
+  const double radius = 0.5 * s_.diameter_m;
+  kc_.dt = s_.dt_s;
+  kc_.radius = radius;
+  kc_.inv_mass = 1.0 / s_.mass_kg;
+  kc_.inv_inertia = 1.0 / (0.4 * s_.mass_kg * radius * radius);  // solid sphere: I = 2/5 m r^2
+  s_.contact.dt = s_.dt_s;
+  t_neigh_ = timers_.add("neighbor");
+  t_comm_ = timers_.add("comm");
+  t_force_ = timers_.add("force+integrate");
+  if (s_.contacts) {
+    const double slab = slabs_.y_hi() - slabs_.y_lo();
+    if (slab < cutoff())
+      throw InputError("too many MPI ranks (" + std::to_string(slabs_.size()) + ") for the box: each y-slab (" +
+                       std::to_string(slab) + " m) must be at least one contact cutoff (" +
+                       std::to_string(cutoff()) + " m) high; use at most " +
+                       std::to_string(static_cast<int>(s_.box_m[1] / cutoff())) + " ranks");
+  }
+}
+
+void DemSystem::set_particles(std::vector<std::int64_t> ids, std::vector<double> x, std::vector<double> v,
+                              std::vector<double> w) {
+  const std::size_t n = ids.size();
+  p_.resize(n, n);
+  std::copy(ids.begin(), ids.end(), p_.id.begin());
+  std::copy(x.begin(), x.end(), p_.x.begin());
+  std::copy(v.begin(), v.end(), p_.v.begin());
+  if (p_.rotation) {
+    if (w.empty()) std::fill(p_.w.begin(), p_.w.end(), 0.0);
+    else std::copy(w.begin(), w.end(), p_.w.begin());
+  }
+  store_.clear();
+  store_.offset.assign(n + 1, 0);
+  list_valid_ = false;
+  rebuild_due_ = true;
+}
+
+void DemSystem::restore(ContactStore store, double displacement_bound, bool rebuild_due, std::int64_t step,
+                        std::int64_t last_sort_step) {
+  store_ = std::move(store);
+  if (store_.offset.size() != p_.n_owned + 1) store_.offset.assign(p_.n_owned + 1, 0);
+  displacement_bound_ = displacement_bound;
+  rebuild_due_ = rebuild_due;
+  step_ = step;
+  last_sort_step_ = last_sort_step;
+  list_valid_ = false;
+}
+
+void DemSystem::prepare() {
+  if (!s_.contacts) return;  // no neighbour search and no ghosts at all
+  if (rebuild_due_) {
+    ScopedPhase t(timers_, t_neigh_);
+    full_rebuild();
+  } else if (!list_valid_) {
+    ScopedPhase t(timers_, t_neigh_);
+    build_ghosts_and_list();
+  } else {
+    ScopedPhase t(timers_, t_comm_);
+    ghosts_.forward(p_);
+  }
+}
+
+void DemSystem::full_rebuild() {
+  if (list_valid_ && p_.rotation) list_.save_history(p_, store_);
+  for (std::size_t i = 0; i < p_.n_owned; ++i) slabs_.wrap(&p_.x[3 * i]);
+  ghosts_.migrate(p_, store_);
+  if (last_sort_step_ < 0 || step_ - last_sort_step_ >= s_.sort_interval_steps) {
+    // Reorder owned particles by cell for memory locality. Results do not depend on the order.
+    const std::vector<std::int32_t> order = spatial_order(p_, cutoff());
+    Particles sorted;
+    sorted.rotation = p_.rotation;
+    sorted.resize(p_.n_owned, p_.n_owned);
+    ContactStore sorted_store;
+    const bool has_store = store_.offset.size() == p_.n_owned + 1;
+    for (std::size_t k = 0; k < order.size(); ++k) {
+      const std::size_t i = static_cast<std::size_t>(order[k]);
+      sorted.id[k] = p_.id[i];
+      std::memcpy(&sorted.x[3 * k], &p_.x[3 * i], 3 * sizeof(double));
+      std::memcpy(&sorted.v[3 * k], &p_.v[3 * i], 3 * sizeof(double));
+      if (p_.rotation) std::memcpy(&sorted.w[3 * k], &p_.w[3 * i], 3 * sizeof(double));
+      if (has_store) {
+        for (std::int64_t e = store_.offset[i]; e < store_.offset[i + 1]; ++e) {
+          sorted_store.partner.push_back(store_.partner[e]);
+          sorted_store.xi.insert(sorted_store.xi.end(), &store_.xi[3 * e], &store_.xi[3 * e + 3]);
+        }
+        sorted_store.offset.push_back(static_cast<std::int64_t>(sorted_store.partner.size()));
+      }
+    }
+    p_ = std::move(sorted);
+    if (has_store) store_ = std::move(sorted_store);
+    last_sort_step_ = step_;
+  }
+  build_ghosts_and_list();
+  displacement_bound_ = 0.0;
+  rebuild_due_ = false;
+  ++rebuilds_;
+}
+
+void DemSystem::build_ghosts_and_list() {
+  ghosts_.build(p_, cutoff());
+  list_.build(p_, cutoff(), p_.rotation);
+  if (p_.rotation) list_.load_history(p_, store_);
+  list_valid_ = true;
+}
+
+void DemSystem::advance() {
+  ScopedPhase t(timers_, t_force_);
+  if (!s_.contacts) {
+    last_stats_ = advance_particles(p_, list_, NoContact{}, s_.drive, kc_);
+  } else if (p_.rotation) {
+    last_stats_ = advance_particles(p_, list_, SpringDashpot<true>{s_.contact}, s_.drive, kc_);
+  } else {
+    last_stats_ = advance_particles(p_, list_, SpringDashpot<false>{s_.contact}, s_.drive, kc_);
+  }
+}
+
+void DemSystem::commit() {
+  p_.swap_buffers();
+  const double time_s = static_cast<double>(step_) * s_.dt_s;
+  ++step_;
+  // one reduction per step: max speed (for the displacement bound), max overlap, blow-up flag
+  double local[3] = {std::isfinite(last_stats_.max_speed2) ? last_stats_.max_speed2 : HUGE_VAL,
+                     last_stats_.max_overlap, last_stats_.bad_particle >= 0 ? 1.0 : 0.0};
+  double global[3];
+  {
+    ScopedPhase t(timers_, t_comm_);
+    MPI_Allreduce(local, global, 3, MPI_DOUBLE, MPI_MAX, slabs_.comm());
+  }
+  const double overlap_rel = global[1] / s_.diameter_m;
+  last_max_overlap_rel_ = overlap_rel;
+  if (global[2] > 0 || !std::isfinite(global[0]) || overlap_rel > s_.overlap_limit) {
+    // Name the particle(s) and the moment; every rank throws the same message.
+    std::int64_t ids[3] = {last_stats_.bad_particle, -1, -1};
+    struct {
+      double value;
+      int rank;
+    } mine{last_stats_.max_overlap, slabs_.rank()}, top{};
+    MPI_Allreduce(&mine, &top, 1, MPI_DOUBLE_INT, MPI_MAXLOC, slabs_.comm());
+    std::int64_t pair[2] = {last_stats_.overlap_particle, last_stats_.overlap_partner};
+    MPI_Bcast(pair, 2, MPI_INT64_T, top.rank, slabs_.comm());
+    MPI_Allreduce(MPI_IN_PLACE, ids, 1, MPI_INT64_T, MPI_MAX, slabs_.comm());
+    std::ostringstream msg;
+    msg << "numerical blow-up at step " << step_ - 1 << " (t = " << time_s << " s): ";
+    if (ids[0] >= 0)
+      msg << "non-finite velocity of particle " << ids[0];
+    else
+      msg << "overlap of " << 100.0 * overlap_rel << " % of the diameter between particles " << pair[0] << " and "
+          << pair[1] << " (limit " << 100.0 * s_.overlap_limit
+          << " %): contacts too soft for the impact speeds, or the time step too large for them";
+    throw RunError(msg.str());
+  }
+  displacement_bound_ += s_.dt_s * std::sqrt(global[0]);
+  if (2.0 * displacement_bound_ > s_.skin_m) rebuild_due_ = true;
+}
+
+Diagnostics DemSystem::diagnostics() const {
+  Diagnostics d;
+  const double m = s_.mass_kg, inertia = 1.0 / kc_.inv_inertia;
+  double sums[17] = {0};
+  for (std::size_t i = 0; i < p_.n_owned; ++i) {
+    double vn[3], xn[3];
+    for (int c = 0; c < 3; ++c) {
+      vn[c] = 0.5 * (p_.v[3 * i + c] + p_.v_next[3 * i + c]);
+      xn[c] = p_.x[3 * i + c];
+    }
+    sums[0] += 0.5 * m * (vn[0] * vn[0] + vn[1] * vn[1] + vn[2] * vn[2]);
+    for (int c = 0; c < 3; ++c) sums[3 + c] += m * vn[c];
+    sums[9] += m * (xn[1] * vn[2] - xn[2] * vn[1]);
+    sums[10] += m * (xn[2] * vn[0] - xn[0] * vn[2]);
+    sums[11] += m * (xn[0] * vn[1] - xn[1] * vn[0]);
+    if (p_.rotation) {
+      double wn[3];
+      for (int c = 0; c < 3; ++c) wn[c] = 0.5 * (p_.w[3 * i + c] + p_.w_next[3 * i + c]);
+      sums[1] += 0.5 * inertia * (wn[0] * wn[0] + wn[1] * wn[1] + wn[2] * wn[2]);
+      for (int c = 0; c < 3; ++c) sums[6 + c] += inertia * wn[c];
+    }
+    if (s_.contacts) {
+      for (std::int64_t e = list_.offset[i]; e < list_.offset[i + 1]; ++e) {
+        const std::int32_t j = list_.index[e];
+        double r2 = 0;
+        for (int c = 0; c < 3; ++c) {
+          const double dx = xn[c] - p_.x[3 * j + c];
+          r2 += dx * dx;
+        }
+        const double overlap = s_.diameter_m - std::sqrt(r2);
+        if (overlap <= 0) continue;
+        // each pair appears twice in the full list: half of each pair's energy per entry
+        sums[2] += 0.25 * s_.contact.k_n * overlap * overlap;
+        if (p_.rotation) {
+          const double* xi = &list_.xi[3 * e];
+          sums[2] += 0.25 * s_.contact.k_t * (xi[0] * xi[0] + xi[1] * xi[1] + xi[2] * xi[2]);
+        }
+        sums[12] += 0.5;
+        sums[13] = std::max(sums[13], overlap);
+      }
+    }
+  }
+  const double local_max = sums[13];
+  sums[13] = 0;
+  sums[14] = static_cast<double>(p_.n_owned);
+  double global[17];
+  MPI_Allreduce(sums, global, 17, MPI_DOUBLE, MPI_SUM, slabs_.comm());
+  double global_max = 0;
+  MPI_Allreduce(&local_max, &global_max, 1, MPI_DOUBLE, MPI_MAX, slabs_.comm());
+  d.kinetic_translational_J = global[0];
+  d.kinetic_rotational_J = global[1];
+  d.contact_energy_J = global[2];
+  d.particles = static_cast<std::int64_t>(global[14]);
+  const double total_mass = m * static_cast<double>(d.particles);
+  for (int c = 0; c < 3; ++c) {
+    d.momentum[c] = global[3 + c];
+    d.velocity_mean[c] = d.particles > 0 ? global[3 + c] / total_mass : 0.0;
+    d.angular_momentum_spin[c] = global[6 + c];
+    d.angular_momentum_orbital[c] = global[9 + c];
+  }
+  d.contacts = global[12];
+  d.max_overlap_rel = global_max / s_.diameter_m;
+  return d;
+}
+
+std::vector<double> DemSystem::synchronous_velocity() const {
+  std::vector<double> out(3 * p_.n_owned);
+  for (std::size_t k = 0; k < out.size(); ++k) out[k] = 0.5 * (p_.v[k] + p_.v_next[k]);
+  return out;
+}
+
+std::vector<double> DemSystem::synchronous_angular_velocity() const {
+  std::vector<double> out;
+  if (!p_.rotation) return out;
+  out.resize(3 * p_.n_owned);
+  for (std::size_t k = 0; k < out.size(); ++k) out[k] = 0.5 * (p_.w[k] + p_.w_next[k]);
+  return out;
+}
+
+ContactStore DemSystem::contact_store() const {
+  if (!list_valid_ || !p_.rotation) return store_;
+  ContactStore s;
+  list_.save_history(p_, s);
+  return s;
+}
+
+std::size_t DemSystem::bytes() const {
+  return p_.bytes() + list_.bytes() +
+         (store_.offset.capacity() + store_.partner.capacity()) * sizeof(std::int64_t) +
+         store_.xi.capacity() * sizeof(double);
+}
+
+}  // namespace cgd::dem

@@ -1,0 +1,599 @@
+#include "sim/run.hpp"
+
+#include <unistd.h>
+
+#include <algorithm>
+#include <cmath>
+#include <csignal>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <iostream>
+#include <numbers>
+#include <sstream>
+
+#include "core/error.hpp"
+#include "core/h5.hpp"
+#include "core/output.hpp"
+#include "core/timers.hpp"
+#include "sim/dem/placement.hpp"
+
+namespace fs = std::filesystem;
+
+namespace cgd {
+
+namespace {
+
+volatile std::sig_atomic_t g_interrupted = 0;
+extern "C" void on_signal(int) { g_interrupted = 1; }
+
+std::string snapshot_name(std::int64_t step) {
+  char buf[64];
+  std::snprintf(buf, sizeof buf, "snap_%09lld.h5", static_cast<long long>(step));
+  return buf;
+}
+
+std::string format_duration(double s) {
+  if (!std::isfinite(s) || s < 0) return "--:--";
+  const long t = std::lround(s);
+  char buf[32];
+  if (t >= 3600) std::snprintf(buf, sizeof buf, "%ld:%02ld:%02ld", t / 3600, (t / 60) % 60, t % 60);
+  else std::snprintf(buf, sizeof buf, "%02ld:%02ld", t / 60, t % 60);
+  return buf;
+}
+
+void write_text_atomically(const fs::path& path, const std::string& text) {
+  const fs::path tmp = path.string() + ".tmp";
+  {
+    std::ofstream out(tmp);
+    out << text;
+    if (!out) throw RunError(tmp.string() + ": cannot write");
+  }
+  fs::rename(tmp, path);
+}
+
+}  // namespace
+
+dem::DemSettings dem_settings_from_scene(const Scene& scene) {
+  const DerivedScales& d = scene.derived;
+  dem::DemSettings s;
+  s.box_m = scene.domain.size_m;
+  s.diameter_m = d.parcel_diameter_m;
+  s.mass_kg = d.parcel_mass_kg;
+  s.dt_s = d.dt_dem_s;
+  s.contacts = scene.has_contacts();
+  s.friction = scene.has_friction();
+  s.contact.k_n = d.k_n_N_m;
+  s.contact.k_t = d.k_t_N_m;
+  s.contact.gamma_n = d.gamma_n_kg_s;
+  s.contact.gamma_t = d.gamma_t_kg_s;
+  s.contact.friction = scene.contact.friction;
+  s.contact.dt = d.dt_dem_s;
+  s.skin_m = scene.contact.skin_over_dp * d.parcel_diameter_m;
+  const Vec3& g = scene.domain.gravity_m_s2;
+  s.drive.accel = {g[0], g[1], g[2]};
+  if (scene.fluid) {
+    const FluidConfig& f = *scene.fluid;
+    if (scene.solves_fluid())
+      throw InputError(scene.source_path + ": fluid.coupling = \"" + to_string(f.coupling) +
+                       "\": the fluid solver is not part of this build yet; allowed here: \"quiescent\"");
+    if (f.drag != DragLaw::Stokes)
+      throw InputError(scene.source_path + ": fluid.drag = \"" + to_string(f.drag) +
+                       "\" with coupling = \"quiescent\": only \"stokes\" is available for a fluid at rest in this "
+                       "build");
+    // Fluid at rest: hydrostatic pressure gradient rho_f g gives buoyancy -V_p rho_f g when the
+    // pressure-gradient force is on; Stokes drag per primary 3 pi mu d_p (u - v) with u = 0, times
+    // alpha^3 primaries per parcel, over the parcel mass alpha^3 m_p.
+    if (f.pressure_gradient_force) {
+      const double factor = 1.0 - f.density_kg_m3 / scene.particles.density_kg_m3;
+      s.drive.accel = factor * s.drive.accel;
+    }
+    s.drive.drag_rate = 3.0 * std::numbers::pi * f.viscosity_Pa_s * scene.particles.diameter_m / d.particle_mass_kg;
+    if (s.drive.drag_rate * s.dt_s > 0.5)
+      throw InputError(scene.source_path + ": the time step " + std::to_string(s.dt_s) +
+                       " s is too large for the Stokes relaxation time " + std::to_string(1.0 / s.drive.drag_rate) +
+                       " s (explicit drag needs dt < 0.5 tau_p); lower contact.t_star or run.dt");
+  }
+  return s;
+}
+
+namespace {
+
+struct Frame {
+  std::int64_t step;
+  double time;
+  std::int64_t count;
+};
+
+class RunDriver {
+ public:
+  RunDriver(const Scene& scene, const RunSettings& settings, MPI_Comm comm)
+      : scene_(scene), settings_(settings), comm_(comm), dem_(dem_settings_from_scene(scene), comm) {
+    MPI_Comm_rank(comm_, &rank_);
+    MPI_Comm_size(comm_, &ranks_);
+    dir_ = settings_.output_dir;
+    dt_ = dem_.settings().dt_s;
+    end_step_ = std::llround(scene_.run.end_time_s / dt_);
+    dump_every_ = scene_.run.dump_interval_s > 0 ? std::max<std::int64_t>(1, std::llround(scene_.run.dump_interval_s / dt_)) : 0;
+    series_every_ = scene_.run.series_interval_s > 0
+                        ? std::max<std::int64_t>(1, std::llround(scene_.run.series_interval_s / dt_))
+                        : std::max<std::int64_t>(1, end_step_ / 1000);
+    t_output_ = run_timers_.add("output");
+    t_checkpoint_ = run_timers_.add("checkpoint");
+    t_diag_ = run_timers_.add("diagnostics");
+  }
+
+  void run() {
+    check_directory();
+    if (rank_ == 0) {
+      fs::create_directories(dir_ / "snapshots");
+      write_text_atomically(dir_ / "scene.toml", scene_.effective_toml);
+    }
+    MPI_Barrier(comm_);
+    if (settings_.restart) load_checkpoint();
+    else initial_state();
+    print_banner();
+    std::signal(SIGINT, on_signal);
+    std::signal(SIGTERM, on_signal);
+    time_loop();
+    finish();
+  }
+
+ private:
+  void check_directory() {
+    // Collective decision on rank 0's view of the file system; nothing is written before it.
+    int status = 0;
+    if (rank_ == 0) {
+      if (settings_.restart) {
+        if (!fs::exists(dir_ / "checkpoint.h5")) status = 1;
+      } else if (fs::exists(dir_) && !fs::is_empty(dir_)) {
+        status = 2;
+      }
+    }
+    MPI_Bcast(&status, 1, MPI_INT, 0, comm_);
+    if (status == 1)
+      throw InputError((dir_ / "checkpoint.h5").string() + ": no checkpoint to restart from (--restart needs a run " +
+                       "directory written by an earlier run of this scene)");
+    if (status == 2)
+      throw InputError(dir_.string() + ": the output directory already holds files; continue that run with " +
+                       "--restart, or remove it / choose another with -o");
+  }
+
+  void initial_state() {
+    const dem::Placement placement =
+        dem::place_particles(scene_.domain.size_m, dem_.settings().diameter_m, scene_.derived.particle_count,
+                             scene_.particles.velocity_rms_m_s, scene_.particles.seed);
+    placement_method_ = placement.method;
+    placement_gap_ = placement.min_gap_rel;
+    std::vector<std::int64_t> ids;
+    std::vector<double> x, v;
+    for (std::int64_t i = 0; i < scene_.derived.particle_count; ++i) {
+      const double* p = &placement.position[3 * i];
+      if (dem_.slabs().owner(p[1]) != rank_) continue;
+      ids.push_back(i);
+      x.insert(x.end(), p, p + 3);
+      v.insert(v.end(), &placement.velocity[3 * i], &placement.velocity[3 * i + 3]);
+    }
+    dem_.set_particles(std::move(ids), std::move(x), std::move(v), {});
+    declare_series();
+  }
+
+  void declare_series() {
+    series_ = schema::Series();
+    series_.add_column("time", 1, "s");
+    series_.add_column("step", 1, "1");
+    series_.add_column("solids_fraction", 1, "1");
+    if (scene_.fluid) {
+      series_.add_column("slip_velocity", 3, "m/s");
+      series_.add_column("fluid_velocity_mean", 3, "m/s");
+    }
+    series_.add_column("particle_velocity_mean", 3, "m/s");
+    series_.add_column("kinetic_energy", 1, "J");
+    series_.add_column("rotational_energy", 1, "J");
+    series_.add_column("contact_energy", 1, "J");
+    series_.add_column("momentum", 3, "kg m/s");
+    series_.add_column("contacts_per_particle", 1, "1");
+    series_.add_column("max_overlap_rel", 1, "1");
+    series_.add_column("neighbor_rebuilds", 1, "1");
+    series_.add_column("wall_seconds", 1, "s");
+    for (const std::string& name : phase_names()) series_.add_column("time_" + name + "_s", 1, "s");
+  }
+
+  std::vector<std::string> phase_names() const {
+    std::vector<std::string> names = dem_.timers().names();
+    for (const std::string& n : run_timers_.names()) names.push_back(n);
+    for (std::string& n : names) std::replace(n.begin(), n.end(), '+', '_');
+    return names;
+  }
+  std::vector<double> phase_seconds() const {
+    std::vector<double> s = dem_.timers().all_seconds();
+    for (double v : run_timers_.all_seconds()) s.push_back(v);
+    return s;
+  }
+
+  double elapsed() const { return wall_offset_ + (wall_seconds() - wall_start_); }
+
+  void append_series_row(std::int64_t step) {
+    ScopedPhase t(run_timers_, t_diag_);
+    const dem::Diagnostics d = dem_.diagnostics();
+    const double volume = scene_.domain.size_m[0] * scene_.domain.size_m[1] * scene_.domain.size_m[2];
+    const double phi = static_cast<double>(d.particles) * std::pow(scene_.particles.parcel_size, 3) *
+                       scene_.derived.particle_volume_m3 / volume;
+    std::vector<double> row{static_cast<double>(step) * dt_, static_cast<double>(step), phi};
+    if (scene_.fluid) {
+      // fluid at rest: <eps u>/<eps> = 0, slip = -<v>
+      for (int c = 0; c < 3; ++c) row.push_back(-d.velocity_mean[c]);
+      for (int c = 0; c < 3; ++c) row.push_back(0.0);
+    }
+    for (int c = 0; c < 3; ++c) row.push_back(d.velocity_mean[c]);
+    row.push_back(d.kinetic_translational_J);
+    row.push_back(d.kinetic_rotational_J);
+    row.push_back(d.contact_energy_J);
+    for (int c = 0; c < 3; ++c) row.push_back(d.momentum[c]);
+    row.push_back(d.particles > 0 ? 2.0 * d.contacts / static_cast<double>(d.particles) : 0.0);
+    row.push_back(d.max_overlap_rel);
+    row.push_back(static_cast<double>(dem_.rebuilds()));
+    double wall = elapsed();
+    MPI_Bcast(&wall, 1, MPI_DOUBLE, 0, comm_);  // identical rows on every rank
+    row.push_back(wall);
+    std::vector<double> phases = phase_seconds();
+    MPI_Bcast(phases.data(), static_cast<int>(phases.size()), MPI_DOUBLE, 0, comm_);
+    row.insert(row.end(), phases.begin(), phases.end());
+    series_.append(row);
+  }
+
+  /// Snapshot of step n, between advance() and commit(): x_n and the synchronous velocities.
+  void write_snapshot(std::int64_t step, const std::string& name, bool add_frame) {
+    ScopedPhase t(run_timers_, t_output_);
+    const dem::Particles& p = dem_.particles();
+    std::vector<double> x(p.x.begin(), p.x.begin() + 3 * static_cast<std::ptrdiff_t>(p.n_owned));
+    for (std::size_t i = 0; i < p.n_owned; ++i) dem_.slabs().wrap(&x[3 * i]);
+    const std::vector<double> v = dem_.synchronous_velocity();
+    const std::vector<double> w = dem_.synchronous_angular_velocity();
+    const std::vector<double> diameter(p.n_owned, dem_.settings().diameter_m);
+    schema::ParticleFields f;
+    f.count = static_cast<std::int64_t>(p.n_owned);
+    f.id = p.id.data();
+    f.position = x.data();
+    f.velocity = v.data();
+    f.angular_velocity = p.rotation ? w.data() : nullptr;
+    f.diameter = diameter.data();
+    schema::write_snapshot((dir_ / "snapshots" / name).string(), comm_, scene_, static_cast<double>(step) * dt_, step,
+                           f);
+    if (add_frame) {
+      std::int64_t n = f.count;
+      MPI_Allreduce(MPI_IN_PLACE, &n, 1, MPI_INT64_T, MPI_SUM, comm_);
+      frames_.push_back({step, static_cast<double>(step) * dt_, n});
+      if (rank_ == 0) schema::write_xdmf(dir_.string(), xdmf_frames());
+    }
+  }
+
+  std::vector<schema::XdmfFrame> xdmf_frames() const {
+    std::vector<schema::XdmfFrame> out;
+    for (const Frame& fr : frames_) {
+      schema::XdmfFrame x;
+      x.snapshot_file = "snapshots/" + snapshot_name(fr.step);
+      x.time_s = fr.time;
+      x.particle_count = fr.count;
+      x.has_angular_velocity = dem_.particles().rotation;
+      out.push_back(x);
+    }
+    return out;
+  }
+
+  void write_series() {
+    ScopedPhase t(run_timers_, t_output_);
+    series_.write((dir_ / "series.h5").string(), comm_, scene_);
+  }
+
+  // ---- checkpoint -------------------------------------------------------------------------------
+  void write_checkpoint() {
+    ScopedPhase t(run_timers_, t_checkpoint_);
+    const dem::Particles& p = dem_.particles();
+    const dem::ContactStore store = dem_.contact_store();
+    const std::int64_t n = static_cast<std::int64_t>(p.n_owned);
+    const std::int64_t m = static_cast<std::int64_t>(store.partner.size());
+    std::vector<std::int64_t> counts(ranks_), contact_counts(ranks_);
+    MPI_Allgather(&n, 1, MPI_INT64_T, counts.data(), 1, MPI_INT64_T, comm_);
+    MPI_Allgather(&m, 1, MPI_INT64_T, contact_counts.data(), 1, MPI_INT64_T, comm_);
+    std::vector<std::int64_t> per_particle(static_cast<std::size_t>(n), 0);
+    if (store.offset.size() == p.n_owned + 1)
+      for (std::int64_t i = 0; i < n; ++i) per_particle[i] = store.offset[i + 1] - store.offset[i];
+    double wall = elapsed();
+    MPI_Bcast(&wall, 1, MPI_DOUBLE, 0, comm_);
+    std::vector<double> phases = phase_seconds();
+    MPI_Bcast(phases.data(), static_cast<int>(phases.size()), MPI_DOUBLE, 0, comm_);
+    std::vector<std::int64_t> frame_steps, frame_counts;
+    std::vector<double> frame_times;
+    for (const Frame& f : frames_) {
+      frame_steps.push_back(f.step);
+      frame_times.push_back(f.time);
+      frame_counts.push_back(f.count);
+    }
+    h5::write_atomically((dir_ / "checkpoint.h5").string(), comm_, [&](h5::File& file) {
+      schema::write_common(file, "checkpoint", scene_);
+      file.set_attr("/", "step", dem_.step_index());
+      file.set_attr("/", "time", static_cast<double>(dem_.step_index()) * dt_);
+      file.set_attr("/", "displacement_bound", dem_.displacement_bound());
+      file.set_attr("/", "rebuild_due", static_cast<std::int64_t>(dem_.rebuild_due()));
+      file.set_attr("/", "last_sort_step", dem_.last_sort_step());
+      file.set_attr("/", "ranks", static_cast<std::int64_t>(ranks_));
+      file.set_attr("/", "rank_particle_counts", counts);
+      file.set_attr("/", "rank_contact_counts", contact_counts);
+      file.set_attr("/", "wall_seconds", wall);
+      file.set_attr("/", "phase_seconds", phases);
+      file.set_attr("/", "frame_steps", frame_steps);
+      file.set_attr("/", "frame_times", frame_times);
+      file.set_attr("/", "frame_counts", frame_counts);
+      file.set_attr("/", "placement_method", placement_method_);
+      file.create_group("/particles");
+      file.write_rows("/particles/id", p.id.data(), n, 1);
+      file.write_rows("/particles/position", p.x.data(), n, 3);       // unwrapped, as in memory
+      file.write_rows("/particles/velocity", p.v.data(), n, 3);       // leapfrog v_{n-1/2}
+      if (p.rotation) file.write_rows("/particles/angular_velocity", p.w.data(), n, 3);
+      file.write_rows("/particles/contact_count", per_particle.data(), n, 1);
+      file.create_group("/contacts");
+      file.write_rows("/contacts/partner", store.partner.data(), m, 1);
+      file.write_rows("/contacts/spring", store.xi.data(), m, 3);
+    });
+    write_series();
+    last_checkpoint_wall_ = wall_seconds();
+  }
+
+  void load_checkpoint() {
+    const std::string path = (dir_ / "checkpoint.h5").string();
+    h5::File file = h5::File::open_read(path, comm_);
+    const std::int64_t step = file.attr_int("/", "step");
+    const std::int64_t ranks_then = file.attr_int("/", "ranks");
+    const std::vector<std::int64_t> counts = file.attr_ints("/", "rank_particle_counts");
+    const std::vector<std::int64_t> ccounts = file.attr_ints("/", "rank_contact_counts");
+    const bool rotation = dem_.particles().rotation;
+    if (rotation != file.exists("/particles/angular_velocity"))
+      throw InputError(path + ": the checkpoint was written with friction " +
+                       std::string(rotation ? "off" : "on") + ", the scene now has it " + (rotation ? "on" : "off"));
+    std::int64_t total = 0, total_c = 0;
+    for (auto c : counts) total += c;
+    for (auto c : ccounts) total_c += c;
+    if (total != scene_.derived.particle_count)
+      throw InputError(path + ": holds " + std::to_string(total) + " particles, the scene calls for " +
+                       std::to_string(scene_.derived.particle_count) + " (the scene changed since the checkpoint)");
+    std::int64_t first = 0, count = total, cfirst = 0, ccount = total_c;
+    const bool same_layout = ranks_then == ranks_;
+    if (same_layout) {
+      first = cfirst = 0;
+      for (int r = 0; r < rank_; ++r) {
+        first += counts[r];
+        cfirst += ccounts[r];
+      }
+      count = counts[rank_];
+      ccount = ccounts[rank_];
+    }
+    std::vector<std::int64_t> ids = file.read_rows_int("/particles/id", first, count);
+    std::vector<double> x = file.read_rows_double("/particles/position", first, count);
+    std::vector<double> v = file.read_rows_double("/particles/velocity", first, count);
+    std::vector<double> w = rotation ? file.read_rows_double("/particles/angular_velocity", first, count)
+                                     : std::vector<double>{};
+    std::vector<std::int64_t> cc = file.read_rows_int("/particles/contact_count", first, count);
+    std::vector<std::int64_t> partner = file.read_rows_int("/contacts/partner", cfirst, ccount);
+    std::vector<double> spring = file.read_rows_double("/contacts/spring", cfirst, ccount);
+    dem::ContactStore store;
+    store.offset.assign(1, 0);
+    if (same_layout) {
+      for (std::int64_t i = 0; i < count; ++i) store.offset.push_back(store.offset.back() + cc[i]);
+      store.partner = std::move(partner);
+      store.xi = std::move(spring);
+    } else {
+      // Different rank count: keep the particles this rank owns (by wrapped height).
+      std::vector<std::int64_t> kid;
+      std::vector<double> kx, kv, kw;
+      std::int64_t c0 = 0;
+      for (std::int64_t i = 0; i < count; ++i) {
+        double q[3] = {x[3 * i], x[3 * i + 1], x[3 * i + 2]};
+        dem_.slabs().wrap(q);
+        const std::int64_t c1 = c0 + cc[i];
+        if (dem_.slabs().owner(q[1]) == rank_) {
+          kid.push_back(ids[i]);
+          kx.insert(kx.end(), q, q + 3);
+          kv.insert(kv.end(), &v[3 * i], &v[3 * i + 3]);
+          if (rotation) kw.insert(kw.end(), &w[3 * i], &w[3 * i + 3]);
+          for (std::int64_t k = c0; k < c1; ++k) {
+            store.partner.push_back(partner[k]);
+            store.xi.insert(store.xi.end(), &spring[3 * k], &spring[3 * k + 3]);
+          }
+          store.offset.push_back(static_cast<std::int64_t>(store.partner.size()));
+        }
+        c0 = c1;
+      }
+      ids = std::move(kid);
+      x = std::move(kx);
+      v = std::move(kv);
+      w = std::move(kw);
+    }
+    dem_.set_particles(std::move(ids), std::move(x), std::move(v), std::move(w));
+    dem_.restore(std::move(store), file.attr_double("/", "displacement_bound"),
+                 !same_layout || file.attr_int("/", "rebuild_due") != 0, step, file.attr_int("/", "last_sort_step"));
+    wall_offset_ = file.attr_double("/", "wall_seconds");
+    const std::vector<double> phases = file.attr_doubles("/", "phase_seconds");
+    const std::size_t nd = dem_.timers().names().size();
+    dem_.timers().set_all_seconds(std::vector<double>(phases.begin(), phases.begin() + std::min(nd, phases.size())));
+    if (phases.size() > nd) run_timers_.set_all_seconds(std::vector<double>(phases.begin() + nd, phases.end()));
+    const auto fs_ = file.attr_ints("/", "frame_steps");
+    const auto ft = file.attr_doubles("/", "frame_times");
+    const auto fc = file.attr_ints("/", "frame_counts");
+    for (std::size_t k = 0; k < fs_.size(); ++k) frames_.push_back({fs_[k], ft[k], fc[k]});
+    placement_method_ = file.attr_string("/", "placement_method");
+    file.close();
+    const fs::path series_path = dir_ / "series.h5";
+    if (fs::exists(series_path)) {
+      series_ = schema::Series::read(series_path.string(), comm_);
+      series_.truncate_after((static_cast<double>(step) - 0.5) * dt_);
+    } else {
+      declare_series();
+    }
+    restarted_from_ = step;
+  }
+
+  // ---- loop ---------------------------------------------------------------------------------------
+  void print_banner() {
+    if (rank_ != 0) return;
+    std::ostringstream o;
+    o << settings_.tool << " " << CGD_VERSION << ": scene " << scene_.name << " (" << scene_.source_path << ")\n";
+    o << describe_scene(scene_);
+    o << "MPI ranks: " << ranks_ << " (slabs along y)\n";
+    if (restarted_from_ >= 0) o << "restart from checkpoint at step " << restarted_from_ << "\n";
+    else o << "placement: " << placement_method_ << ", smallest gap " << placement_gap_ << " d\n";
+    o << "steps: " << end_step_ << " of " << dt_ << " s; snapshots every " << dump_every_ << " steps; series every "
+      << series_every_ << " steps\n";
+    o << "output: " << dir_.string() << "\n";
+    std::cout << o.str() << std::flush;
+  }
+
+  void progress(std::int64_t step, bool force) {
+    if (rank_ != 0 || settings_.quiet || !isatty(STDERR_FILENO)) return;
+    const double now = wall_seconds();
+    if (!force && now - last_progress_ < 1.0) return;
+    last_progress_ = now;
+    const double done = static_cast<double>(step - loop_start_step_);
+    const double rate = done / std::max(1e-9, now - loop_start_wall_);
+    const double eta = static_cast<double>(end_step_ - step) / std::max(rate, 1e-30);
+    std::fprintf(stderr, "\r%s: step %lld/%lld (%.1f %%)  t = %.4g s  %.3g steps/s  ETA %s   ",
+                 settings_.tool.c_str(), static_cast<long long>(step), static_cast<long long>(end_step_),
+                 100.0 * static_cast<double>(step) / std::max<double>(1, static_cast<double>(end_step_)),
+                 static_cast<double>(step) * dt_, rate, format_duration(eta).c_str());
+    if (force) std::fprintf(stderr, "\n");
+  }
+
+  void time_loop() {
+    loop_start_wall_ = wall_seconds();
+    last_checkpoint_wall_ = loop_start_wall_;
+    loop_start_step_ = dem_.step_index();
+    for (;;) {
+      const std::int64_t step = dem_.step_index();
+      if (step == end_step_ && restarted_from_ != step) write_checkpoint();  // the final state can be extended
+      // every 16 steps: agree on checkpoint (rank 0's clock) and interruption (any rank)
+      if (step % 16 == 0 && step != end_step_) {
+        int flags[2] = {g_interrupted ? 1 : 0, 0};
+        if (rank_ == 0 && wall_seconds() - last_checkpoint_wall_ >= scene_.run.checkpoint_wall_s) flags[1] = 1;
+        MPI_Allreduce(MPI_IN_PLACE, flags, 2, MPI_INT, MPI_MAX, comm_);
+        if (flags[0]) {
+          write_checkpoint();
+          progress(step, true);
+          throw RunError("interrupted at step " + std::to_string(step) + " (t = " +
+                         std::to_string(static_cast<double>(step) * dt_) + " s); checkpoint written, continue with " +
+                         "--restart");
+        }
+        if (flags[1] && step != restarted_from_) write_checkpoint();
+      }
+      try {
+        dem_.prepare();
+        dem_.advance();
+      } catch (const RunError&) {
+        throw;
+      }
+      const bool final_step = step >= end_step_;
+      if (step % series_every_ == 0 || final_step) append_series_row(step);
+      const bool dump = final_step || step == 0 || (dump_every_ > 0 && step % dump_every_ == 0);
+      if (dump) {
+        write_snapshot(step, snapshot_name(step), true);
+        write_series();
+      }
+      if (final_step) break;
+      try {
+        dem_.commit();
+      } catch (const RunError&) {
+        // Keep the last good checkpoint; leave the failed state for diagnosis.
+        diagnostic_snapshot();
+        write_series();
+        throw;
+      }
+      progress(dem_.step_index(), false);
+    }
+    progress(end_step_, true);
+  }
+
+  void diagnostic_snapshot() {
+    // After a failed commit the current buffers hold the failed state; write it as it is.
+    const dem::Particles& p = dem_.particles();
+    const std::vector<double> diameter(p.n_owned, dem_.settings().diameter_m);
+    schema::ParticleFields f;
+    f.count = static_cast<std::int64_t>(p.n_owned);
+    f.id = p.id.data();
+    f.position = p.x.data();
+    f.velocity = p.v.data();
+    f.angular_velocity = p.rotation ? p.w.data() : nullptr;
+    f.diameter = diameter.data();
+    const std::int64_t step = dem_.step_index();
+    const std::string name = "diagnostic_" + snapshot_name(step).substr(5);
+    schema::write_snapshot((dir_ / "snapshots" / name).string(), comm_, scene_, static_cast<double>(step) * dt_, step,
+                           f);
+    if (rank_ == 0)
+      std::cerr << "diagnostic snapshot: " << (dir_ / "snapshots" / name).string()
+                << "; last good checkpoint kept: " << (dir_ / "checkpoint.h5").string() << "\n";
+  }
+
+  void finish() {
+    write_series();
+    // timing table: max over ranks per phase
+    std::vector<double> phases = phase_seconds();
+    std::vector<double> max_phases(phases.size());
+    MPI_Allreduce(phases.data(), max_phases.data(), static_cast<int>(phases.size()), MPI_DOUBLE, MPI_MAX, comm_);
+    const double wall = elapsed();
+    std::int64_t n_local = static_cast<std::int64_t>(dem_.particles().n_owned), n = 0;
+    MPI_Allreduce(&n_local, &n, 1, MPI_INT64_T, MPI_SUM, comm_);
+    double bytes = static_cast<double>(dem_.bytes()), total_bytes = 0;
+    MPI_Allreduce(&bytes, &total_bytes, 1, MPI_DOUBLE, MPI_SUM, comm_);
+    if (rank_ == 0) {
+      const double steps = static_cast<double>(end_step_ - loop_start_step_);
+      const double loop_wall = wall_seconds() - loop_start_wall_;
+      std::ostringstream o;
+      o << "\ntiming (wall seconds, slowest rank) -- this session: " << steps << " steps in " << loop_wall << " s\n";
+      const std::vector<std::string> names = phase_names();
+      for (std::size_t k = 0; k < names.size(); ++k) {
+        char line[128];
+        std::snprintf(line, sizeof line, "  %-18s %10.3f s  %5.1f %%\n", names[k].c_str(), max_phases[k],
+                      100.0 * max_phases[k] / std::max(wall, 1e-12));
+        o << line;
+      }
+      char line[256];
+      std::snprintf(line, sizeof line,
+                    "  %-18s %10.3f s\n  particle-steps per second per core: %.3e\n  DEM memory: %.0f bytes per "
+                    "particle (%.1f MB)\n",
+                    "total (all runs)", wall, static_cast<double>(n) * steps / std::max(loop_wall, 1e-12) / ranks_,
+                    total_bytes / std::max<double>(1, static_cast<double>(n)), total_bytes / 1e6);
+      o << line;
+      std::cout << o.str() << std::flush;
+      std::ostringstream done;
+      done << "completed " << end_step_ << " steps, t = " << static_cast<double>(end_step_) * dt_ << " s, " << n
+           << " particles, " << wall << " s wall\n";
+      write_text_atomically(dir_ / "DONE", done.str());
+    }
+    MPI_Barrier(comm_);
+  }
+
+  const Scene& scene_;
+  RunSettings settings_;
+  MPI_Comm comm_;
+  int rank_ = 0, ranks_ = 1;
+  fs::path dir_;
+  dem::DemSystem dem_;
+  double dt_ = 0;
+  std::int64_t end_step_ = 0, dump_every_ = 0, series_every_ = 1;
+  schema::Series series_;
+  std::vector<Frame> frames_;
+  PhaseTimers run_timers_;
+  std::size_t t_output_ = 0, t_checkpoint_ = 0, t_diag_ = 0;
+  double wall_start_ = wall_seconds(), wall_offset_ = 0, last_checkpoint_wall_ = 0, last_progress_ = 0;
+  double loop_start_wall_ = 0;
+  std::int64_t loop_start_step_ = 0, restarted_from_ = -1;
+  std::string placement_method_;
+  double placement_gap_ = 0;
+};
+
+}  // namespace
+
+void run_scene(const Scene& scene, const RunSettings& settings, MPI_Comm comm) {
+  RunDriver driver(scene, settings, comm);
+  driver.run();
+}
+
+}  // namespace cgd

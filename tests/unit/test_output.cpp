@@ -1,0 +1,361 @@
+// The file schema (design.md "Files (HDF5 schema, version 1)") in one process: a snapshot read back
+// field by field, the series round trip and truncation, and run.xmf.
+//
+// Set CGD_KEEP_TEST_FILES=1 to keep the files (the folder is printed) for a look with h5dump,
+// h5py, tools/inspect_snapshot.py or ParaView.
+#include <gtest/gtest.h>
+#include <mpi.h>
+
+#include <cstdint>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "core/error.hpp"
+#include "core/h5.hpp"
+#include "core/output.hpp"
+#include "core/scene.hpp"
+
+namespace fs = std::filesystem;
+using cgd::h5::File;
+
+namespace {
+
+/// A scene filled by hand (independent of the scene loader), with fluid unless `dry`.
+cgd::Scene test_scene(bool dry = false) {
+  cgd::Scene s;
+  s.name = "unit_snapshot";
+  s.source_path = "tests/unit/test_output.cpp";
+  s.effective_toml = "[domain]\nsize_dp = [4, 5, 3]\n\n[particles]\ndiameter = 1e-3  # m\n";
+  s.domain.size_m = {4e-3, 5e-3, 3e-3};
+  s.particles.diameter_m = 1e-3;
+  s.particles.seed = 42;
+  s.contact.gamma_star = 1e-3;
+  if (!dry) {
+    s.fluid.emplace();
+    s.fluid->cells = {4, 5, 3};
+    s.fluid->coupling = cgd::Coupling::OneWay;
+  }
+  s.run.end_time_s = 0.5;
+  s.derived.u_t_m_s = 0.2185;
+  s.derived.k_n_N_m = 1.27;
+  s.derived.t_c_s = 3.59e-5;
+  s.derived.dt_dem_s = 7.18e-7;
+  s.derived.particle_count = 3;
+  s.derived.cells = {4, 5, 3};
+  return s;
+}
+
+class OutputTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    std::string templ = (fs::temp_directory_path() / "cgd_test_output_XXXXXX").string();
+    ASSERT_NE(mkdtemp(templ.data()), nullptr);
+    dir_ = templ;
+  }
+  void TearDown() override {
+    if (std::getenv("CGD_KEEP_TEST_FILES")) {
+      std::printf("kept test files in %s\n", dir_.c_str());
+      return;
+    }
+    std::error_code ec;
+    fs::remove_all(dir_, ec);
+  }
+  std::string path(const std::string& name) const { return (dir_ / name).string(); }
+  fs::path dir_;
+};
+
+/// Three particles with every optional array, and a (n_x, n_y, n_z) = (4, 5, 3) fluid grid whose
+/// fields vary along y only (value = y index), so a picture of it shows horizontal bands.
+struct SnapshotData {
+  std::vector<std::int64_t> id{11, 12, 13};
+  std::vector<double> position{0.5e-3, 0.5e-3, 0.5e-3, 2.0e-3, 2.5e-3, 1.5e-3, 3.5e-3, 4.5e-3, 2.5e-3};
+  std::vector<double> velocity{0.1, -0.2, 0.3, 0.0, -0.1, 0.0, -0.1, -0.3, 0.2};
+  std::vector<double> angular_velocity{1, 2, 3, 4, 5, 6, 7, 8, 9};
+  std::vector<double> diameter{1e-3, 1e-3, 1e-3};
+  std::vector<double> drag_coefficient{1e5, 2e5, 3e5};
+  std::vector<double> fluid_velocity{0, 1, 0, 0, 2, 0, 0, 3, 0};
+  std::vector<double> pressure_gradient{1, 0, 0, 0, 1, 0, 0, 0, 1};
+  std::array<int, 3> cells{4, 5, 3};
+  std::vector<double> void_fraction, fluid_vel, pressure;
+
+  SnapshotData() {
+    for (int z = 0; z < cells[2]; ++z)
+      for (int y = 0; y < cells[1]; ++y)
+        for (int x = 0; x < cells[0]; ++x) {
+          void_fraction.push_back(0.5 + 0.1 * y);
+          pressure.push_back(100.0 * y);
+          for (int c = 0; c < 3; ++c) fluid_vel.push_back(c == 1 ? 0.01 * y : 0.0);
+        }
+  }
+  cgd::schema::ParticleFields particles(bool optional = true) const {
+    cgd::schema::ParticleFields p;
+    p.count = 3;
+    p.id = id.data();
+    p.position = position.data();
+    p.velocity = velocity.data();
+    p.diameter = diameter.data();
+    if (optional) {
+      p.angular_velocity = angular_velocity.data();
+      p.drag_coefficient = drag_coefficient.data();
+      p.fluid_velocity = fluid_velocity.data();
+      p.pressure_gradient = pressure_gradient.data();
+      p.pressure_gradient_mean = {0.0, 1.25e4, 0.0};
+    }
+    return p;
+  }
+  cgd::schema::FluidFields fluid() const {
+    cgd::schema::FluidFields f;
+    f.cells = cells;
+    f.spacing_m = {1e-3, 1e-3, 1e-3};
+    f.origin_m = {0, 0, 0};
+    f.y_offset = 0;
+    f.y_count = cells[1];
+    f.void_fraction = void_fraction.data();
+    f.velocity = fluid_vel.data();
+    f.pressure = pressure.data();
+    return f;
+  }
+};
+
+}  // namespace
+
+TEST_F(OutputTest, SnapshotReadsBackFieldByFieldWithSchemaShapesAndAttributes) {
+  const SnapshotData d;
+  const cgd::Scene scene = test_scene();
+  const auto particles = d.particles();
+  const auto fluid = d.fluid();
+  const std::string file = path("snap_000000100.h5");
+  cgd::schema::write_snapshot(file, MPI_COMM_WORLD, scene, 0.0125, 100, particles, &fluid);
+  EXPECT_FALSE(fs::exists(file + ".tmp"));
+
+  const File f = File::open_read(file, MPI_COMM_WORLD);
+  // root attributes
+  EXPECT_EQ(f.attr_string("/", "cgd_format"), "snapshot");
+  EXPECT_EQ(f.attr_int("/", "cgd_format_version"), 1);
+  EXPECT_FALSE(f.attr_string("/", "code_version").empty());
+  const std::string created = f.attr_string("/", "created");
+  ASSERT_EQ(created.size(), 20u) << created;  // 2025-01-31T12:00:00Z
+  EXPECT_EQ(created[10], 'T');
+  EXPECT_EQ(created.back(), 'Z');
+  EXPECT_EQ(f.attr_string("/", "scene"), scene.effective_toml);
+  EXPECT_EQ(f.attr_double("/", "time"), 0.0125);
+  EXPECT_EQ(f.attr_int("/", "step"), 100);
+  // /params: config and derived numbers with units in their names
+  EXPECT_EQ(f.attr_double("/params", "diameter_m"), 1e-3);
+  EXPECT_EQ(f.attr_double("/params", "density_kg_m3"), 1500.0);
+  EXPECT_EQ(f.attr_double("/params", "solids_fraction"), 0.05);
+  EXPECT_EQ(f.attr_int("/params", "seed"), 42);
+  EXPECT_EQ(f.attr_doubles("/params", "box_size_m"), (std::vector<double>{4e-3, 5e-3, 3e-3}));
+  EXPECT_EQ(f.attr_doubles("/params", "gravity_m_s2"), (std::vector<double>{0.0, -9.81, 0.0}));
+  EXPECT_EQ(f.attr_double("/params", "gamma_star"), 1e-3);
+  EXPECT_FALSE(f.has_attr("/params", "stiffness_n_N_m"));  // optional, not given
+  EXPECT_EQ(f.attr_double("/params", "u_t_m_s"), 0.2185);
+  EXPECT_EQ(f.attr_double("/params", "k_n_N_m"), 1.27);
+  EXPECT_EQ(f.attr_double("/params", "t_c_s"), 3.59e-5);
+  EXPECT_EQ(f.attr_double("/params", "dt_dem_s"), 7.18e-7);
+  EXPECT_EQ(f.attr_int("/params", "particle_count"), 3);
+  EXPECT_EQ(f.attr_ints("/params", "cells"), (std::vector<std::int64_t>{4, 5, 3}));
+  EXPECT_EQ(f.attr_string("/params", "contact_model"), cgd::to_string(cgd::ContactModel::SpringDashpot));
+  EXPECT_EQ(f.attr_string("/params", "coupling"), cgd::to_string(cgd::Coupling::OneWay));
+  EXPECT_EQ(f.attr_string("/params", "drag"), cgd::to_string(cgd::DragLaw::Beetstra));
+  EXPECT_EQ(f.attr_double("/params", "fluid_viscosity_Pa_s"), 1.8e-5);
+  EXPECT_EQ(f.attr_int("/params", "has_fluid"), 1);
+  // particles
+  EXPECT_EQ(f.dims("/particles/id"), (std::vector<std::uint64_t>{3}));
+  EXPECT_EQ(f.read_int("/particles/id"), d.id);
+  for (const char* name : {"position", "velocity", "angular_velocity", "fluid_velocity", "pressure_gradient"})
+    EXPECT_EQ(f.dims(std::string("/particles/") + name), (std::vector<std::uint64_t>{3, 3})) << name;
+  for (const char* name : {"diameter", "drag_coefficient"})
+    EXPECT_EQ(f.dims(std::string("/particles/") + name), (std::vector<std::uint64_t>{3})) << name;
+  EXPECT_EQ(f.read_double("/particles/position"), d.position);
+  EXPECT_EQ(f.read_double("/particles/velocity"), d.velocity);
+  EXPECT_EQ(f.read_double("/particles/angular_velocity"), d.angular_velocity);
+  EXPECT_EQ(f.read_double("/particles/diameter"), d.diameter);
+  EXPECT_EQ(f.read_double("/particles/drag_coefficient"), d.drag_coefficient);
+  EXPECT_EQ(f.read_double("/particles/fluid_velocity"), d.fluid_velocity);
+  EXPECT_EQ(f.read_double("/particles/pressure_gradient"), d.pressure_gradient);
+  EXPECT_EQ(f.attr_doubles("/particles", "pressure_gradient_mean"), (std::vector<double>{0.0, 1.25e4, 0.0}));
+  EXPECT_EQ(f.attr_string("/particles/velocity", "unit"), "m/s");
+  // fluid: (n_z, n_y, n_x), x fastest
+  EXPECT_EQ(f.attr_ints("/fluid", "cells"), (std::vector<std::int64_t>{4, 5, 3}));
+  EXPECT_EQ(f.attr_doubles("/fluid", "spacing"), (std::vector<double>{1e-3, 1e-3, 1e-3}));
+  EXPECT_EQ(f.attr_doubles("/fluid", "origin"), (std::vector<double>{0, 0, 0}));
+  EXPECT_EQ(f.dims("/fluid/void_fraction"), (std::vector<std::uint64_t>{3, 5, 4}));
+  EXPECT_EQ(f.dims("/fluid/pressure"), (std::vector<std::uint64_t>{3, 5, 4}));
+  EXPECT_EQ(f.dims("/fluid/velocity"), (std::vector<std::uint64_t>{3, 5, 4, 3}));
+  EXPECT_EQ(f.read_double("/fluid/void_fraction"), d.void_fraction);
+  EXPECT_EQ(f.read_double("/fluid/velocity"), d.fluid_vel);
+  EXPECT_EQ(f.read_double("/fluid/pressure"), d.pressure);
+  // cell (z=2, y=3, x=1): pressure 100 * y
+  EXPECT_EQ(f.read_block("/fluid/pressure", {2, 3, 1}, {1, 1, 1}), std::vector<double>{300.0});
+}
+
+TEST_F(OutputTest, DrySnapshotWithoutOptionalArraysHasNoFluidAndNoOptionalDatasets) {
+  const SnapshotData d;
+  const cgd::Scene scene = test_scene(/*dry=*/true);
+  const std::string file = path("dry.h5");
+  cgd::schema::write_snapshot(file, MPI_COMM_WORLD, scene, 1.0, 7, d.particles(/*optional=*/false));
+  const File f = File::open_read(file, MPI_COMM_WORLD);
+  EXPECT_TRUE(f.exists("/particles/position"));
+  EXPECT_TRUE(f.exists("/particles/diameter"));
+  for (const char* name : {"angular_velocity", "drag_coefficient", "fluid_velocity", "pressure_gradient"})
+    EXPECT_FALSE(f.exists(std::string("/particles/") + name)) << name;
+  EXPECT_FALSE(f.has_attr("/particles", "pressure_gradient_mean"));
+  EXPECT_FALSE(f.exists("/fluid"));
+  EXPECT_EQ(f.attr_int("/params", "has_fluid"), 0);
+  EXPECT_FALSE(f.has_attr("/params", "coupling"));
+  EXPECT_FALSE(f.has_attr("/params", "fluid_density_kg_m3"));
+}
+
+TEST_F(OutputTest, SnapshotWithIncompleteFluidSlabIsRejectedAndNothingIsWritten) {
+  const SnapshotData d;
+  auto fluid = d.fluid();
+  fluid.y_count = 4;  // one layer of 5 missing
+  const std::string file = path("bad.h5");
+  EXPECT_THROW(cgd::schema::write_snapshot(file, MPI_COMM_WORLD, test_scene(), 0.0, 0, d.particles(), &fluid),
+               cgd::RunError);
+  auto particles = d.particles();
+  particles.position = nullptr;  // required array missing
+  EXPECT_THROW(cgd::schema::write_snapshot(file, MPI_COMM_WORLD, test_scene(), 0.0, 0, particles), cgd::RunError);
+  EXPECT_FALSE(fs::exists(file));
+  EXPECT_FALSE(fs::exists(file + ".tmp"));
+}
+
+TEST_F(OutputTest, SeriesRoundTripKeepsColumnOrderWidthsUnitsAndValues) {
+  cgd::schema::Series s;
+  s.add_column("time", 1, "s");
+  s.add_column("slip_velocity", 3, "m/s");
+  s.add_column("solids_fraction", 1, "1");
+  EXPECT_EQ(s.row_width(), 5);
+  for (int r = 0; r < 4; ++r) s.append({0.1 * r, 1.0 * r, 2.0 * r, 3.0 * r, 0.05});
+  EXPECT_THROW(s.append({1.0, 2.0}), std::invalid_argument);
+  EXPECT_THROW(s.add_column("late", 1, "1"), std::logic_error);
+  const std::string file = path("series.h5");
+  s.write(file, MPI_COMM_WORLD, test_scene());
+  EXPECT_FALSE(fs::exists(file + ".tmp"));
+
+  {
+    const File f = File::open_read(file, MPI_COMM_WORLD);
+    EXPECT_EQ(f.attr_string("/", "cgd_format"), "series");
+    EXPECT_EQ(f.attr_strings("/", "columns"), (std::vector<std::string>{"time", "slip_velocity", "solids_fraction"}));
+    EXPECT_EQ(f.dims("/time"), (std::vector<std::uint64_t>{4}));
+    EXPECT_EQ(f.dims("/slip_velocity"), (std::vector<std::uint64_t>{4, 3}));
+    EXPECT_EQ(f.attr_string("/slip_velocity", "unit"), "m/s");
+    EXPECT_TRUE(f.exists("/params"));
+  }
+  const cgd::schema::Series r = cgd::schema::Series::read(file, MPI_COMM_WORLD);
+  EXPECT_EQ(r.rows(), 4u);
+  EXPECT_EQ(r.row_width(), 5);
+  EXPECT_EQ(r.column("time"), s.column("time"));
+  EXPECT_EQ(r.column("slip_velocity"), s.column("slip_velocity"));
+  EXPECT_EQ(r.column("solids_fraction"), (std::vector<double>{0.05, 0.05, 0.05, 0.05}));
+  EXPECT_THROW(r.column("no_such_column"), cgd::InputError);
+}
+
+TEST_F(OutputTest, SeriesTruncateAfterDropsRowsLaterThanTheRestartTime) {
+  cgd::schema::Series s;
+  s.add_column("time", 1, "s");
+  s.add_column("particle_velocity_mean", 3, "m/s");
+  for (int r = 0; r < 6; ++r) s.append({0.5 * r, 1.0 * r, 0, -1.0 * r});
+  s.truncate_after(1.0);  // keeps t = 0, 0.5, 1.0
+  EXPECT_EQ(s.rows(), 3u);
+  EXPECT_EQ(s.column("time"), (std::vector<double>{0, 0.5, 1.0}));
+  EXPECT_EQ(s.column("particle_velocity_mean"), (std::vector<double>{0, 0, 0, 1, 0, -1, 2, 0, -2}));
+  s.append({1.5, 9, 9, 9});  // appending continues after the truncation
+  const std::string file = path("series.h5");
+  s.write(file, MPI_COMM_WORLD, test_scene());
+  const auto r = cgd::schema::Series::read(file, MPI_COMM_WORLD);
+  EXPECT_EQ(r.column("time"), (std::vector<double>{0, 0.5, 1.0, 1.5}));
+  s.truncate_after(-1.0);
+  EXPECT_EQ(s.rows(), 0u);
+}
+
+TEST_F(OutputTest, SeriesReadOfASnapshotOrMissingFileThrowsInputError) {
+  const SnapshotData d;
+  const std::string snap = path("snap.h5");
+  cgd::schema::write_snapshot(snap, MPI_COMM_WORLD, test_scene(), 0.0, 0, d.particles());
+  try {
+    cgd::schema::Series::read(snap, MPI_COMM_WORLD);
+    FAIL() << "no InputError";
+  } catch (const cgd::InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("not a cgd series file"), std::string::npos) << e.what();
+  }
+  EXPECT_THROW(cgd::schema::Series::read(path("none.h5"), MPI_COMM_WORLD), cgd::InputError);
+}
+
+TEST_F(OutputTest, RunXmfIsWellFormedXdmf3ListingEveryFrameFile) {
+  const SnapshotData d;
+  const cgd::Scene scene = test_scene();
+  fs::create_directories(dir_ / "snapshots");
+  std::vector<cgd::schema::XdmfFrame> frames;
+  for (const int step : {0, 100}) {
+    const double time_s = step == 0 ? 0.0 : 0.01;
+    char name[64];
+    std::snprintf(name, sizeof name, "snapshots/snap_%09d.h5", step);
+    const auto fluid = d.fluid();
+    cgd::schema::write_snapshot(path(name), MPI_COMM_WORLD, scene, time_s, step, d.particles(), &fluid);
+    cgd::schema::XdmfFrame fr;
+    fr.snapshot_file = name;
+    fr.time_s = time_s;
+    fr.particle_count = 3;
+    fr.has_angular_velocity = true;
+    fr.has_fluid = true;
+    fr.cells = d.cells;
+    fr.spacing_m = {1e-3, 2e-3, 3e-3};
+    fr.origin_m = {0.1, 0.2, 0.3};
+    frames.push_back(fr);
+  }
+  cgd::schema::write_xdmf(dir_.string(), frames);
+  const std::string xmf = path("run.xmf");
+  ASSERT_TRUE(fs::exists(xmf));
+  EXPECT_FALSE(fs::exists(xmf + ".tmp"));
+  std::stringstream buffer;
+  buffer << std::ifstream(xmf).rdbuf();
+  const std::string text = buffer.str();
+  for (const char* expected :
+       {"<Xdmf", "Version=\"3.0\"", "CollectionType=\"Temporal\"", "CollectionType=\"Spatial\"",
+        "snapshots/snap_000000000.h5:/particles/position", "snapshots/snap_000000100.h5:/fluid/velocity",
+        "TopologyType=\"Polyvertex\" NumberOfElements=\"3\"", "GeometryType=\"XYZ\"", "Name=\"angular_velocity\"",
+        "TopologyType=\"3DCoRectMesh\" Dimensions=\"4 6 5\"",  // nodes (n_z+1, n_y+1, n_x+1)
+        "GeometryType=\"ORIGIN_DXDYDZ\"", ">0.3 0.2 0.1<",  // origin, z y x
+        ">0.003 0.002 0.001<", "Dimensions=\"3 5 4 3\"", "Center=\"Cell\"", "<Time Value=\"0.01\"/>"})
+    EXPECT_NE(text.find(expected), std::string::npos) << expected;
+
+  // Well-formed XML by a real parser, when the system Python is there (it is in the dev setup).
+  if (!fs::exists("/usr/bin/python3")) GTEST_SKIP() << "no /usr/bin/python3 to parse the XML";
+  const std::string cmd = "/usr/bin/python3 -c \"import sys, xml.etree.ElementTree as ET; r = ET.parse(sys.argv[1])"
+                          ".getroot(); sys.exit(0 if len(r.findall('./Domain/Grid/Grid')) == 2 else 3)\" '" +
+                          xmf + "'";
+  EXPECT_EQ(std::system(cmd.c_str()), 0) << cmd;
+}
+
+TEST_F(OutputTest, H5pyReadsStringAttributesAsStrAndIdsAsInt64) {
+  if (!fs::exists("/usr/bin/python3") || std::system("/usr/bin/python3 -c 'import h5py' 2>/dev/null") != 0)
+    GTEST_SKIP() << "no /usr/bin/python3 with h5py";
+  const SnapshotData d;
+  const auto fluid = d.fluid();
+  const std::string file = path("snap.h5");
+  cgd::schema::write_snapshot(file, MPI_COMM_WORLD, test_scene(), 0.0, 0, d.particles(), &fluid);
+  cgd::schema::Series s;
+  s.add_column("time", 1, "s");
+  s.append({0.0});
+  s.write(path("series.h5"), MPI_COMM_WORLD, test_scene());
+  const std::string script = path("check.py");
+  std::ofstream(script) << R"(import sys, h5py, numpy as np
+with h5py.File(sys.argv[1], 'r') as f:
+    for k in ('cgd_format', 'code_version', 'created', 'scene'):
+        assert isinstance(f.attrs[k], str), (k, type(f.attrs[k]))
+    assert isinstance(f['params'].attrs['contact_model'], str)
+    assert f.attrs['cgd_format_version'] == 1 and f.attrs['cgd_format_version'].dtype == np.int64
+    assert f['particles/id'].dtype == np.int64 and f['particles/position'].dtype == np.float64
+    assert f['fluid/velocity'].shape == (3, 5, 4, 3)
+with h5py.File(sys.argv[2], 'r') as f:
+    assert [str(c) for c in f.attrs['columns']] == ['time'] and isinstance(f.attrs['columns'][0], str)
+)";
+  const std::string cmd = "/usr/bin/python3 '" + script + "' '" + file + "' '" + path("series.h5") + "'";
+  EXPECT_EQ(std::system(cmd.c_str()), 0) << cmd;
+}
