@@ -205,7 +205,8 @@ TEST_F(ParallelH5, SnapshotWrittenByEveryRankReadsBackAsOneFile) {
   std::vector<std::int64_t> expect_ids(static_cast<std::size_t>(total));
   for (std::int64_t i = 0; i < total; ++i) expect_ids[i] = i;
   EXPECT_EQ(f.read_int("/particles/id"), expect_ids);
-  EXPECT_EQ(f.dims("/particles/position"), (std::vector<std::uint64_t>{static_cast<std::uint64_t>(total), 3}));
+  EXPECT_EQ(f.dims("/particles/position"),
+            (std::vector<std::uint64_t>{static_cast<std::uint64_t>(total), 3}));
   EXPECT_EQ(f.read_rows_double("/particles/position", first, mine), position);
   std::vector<double> expect_pressure;
   for (int z = 0; z < nz; ++z)
