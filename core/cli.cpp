@@ -38,7 +38,8 @@ void parse_command_line(CLI::App& app, int argc, char** argv, const std::string&
   }
 }
 
-RunOptions parse_run_command_line(int argc, char** argv, const std::string& tool_name, const std::string& description,
+RunOptions parse_run_command_line(int argc, char** argv, const std::string& tool_name,
+                                  const std::string& description,
                                   const std::function<void(CLI::App&)>& add_options) {
   RunOptions options;
   CLI::App app{description, tool_name};

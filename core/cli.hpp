@@ -6,8 +6,9 @@
 //   int main(int argc, char** argv) {
 //     MPI_Init(&argc, &argv);                       // if the tool uses MPI
 //     const int status = cgd::run_tool([&] {
-//       const auto options = cgd::parse_run_command_line(argc, argv, "cgd-generate", "Resolved CFD-DEM runs");
-//       const auto scene = cgd::load_scene(options.scene_path, options.overrides);   // before any output
+//       const auto options = cgd::parse_run_command_line(argc, argv, "cgd-generate", "Resolved CFD-DEM
+//       runs"); const auto scene = cgd::load_scene(options.scene_path, options.overrides);   // before any
+//       output
 //       ...
 //       return cgd::kExitOk;
 //     });
@@ -58,7 +59,8 @@ class CommandLineExit : public std::exception {
 /// Parses `TOOL SCENE.toml [--set KEY=VALUE]... [-o DIR] [--restart] [--quiet]` (plus --help,
 /// --version). `add_options`, if given, adds tool-specific options (e.g. cgd-coarse's --model)
 /// to the CLI11 app before parsing; the variables they bind must outlive the call.
-RunOptions parse_run_command_line(int argc, char** argv, const std::string& tool_name, const std::string& description,
+RunOptions parse_run_command_line(int argc, char** argv, const std::string& tool_name,
+                                  const std::string& description,
                                   const std::function<void(CLI::App&)>& add_options = {});
 
 /// For tools with their own options (cgd-filter, cgd-fit): adds --version (CGD_VERSION) and

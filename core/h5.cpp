@@ -143,8 +143,11 @@ void write_attribute(File& file, const std::string& object, const std::string& n
   const htri_t present = H5Aexists(obj.get(), name.c_str());
   if (present > 0 && H5Adelete(obj.get(), name.c_str()) < 0) throw_write(file.path(), describe(object, name));
   Handle space = dims ? simple_space(*dims) : Handle(H5Screate(H5S_SCALAR), H5Sclose);
-  Handle attr(H5Acreate2(obj.get(), name.c_str(), file_type, space.get(), H5P_DEFAULT, H5P_DEFAULT), H5Aclose);
-  if (!attr.valid() || H5Awrite(attr.get(), mem_type, data) < 0) throw_write(file.path(), describe(object, name));
+  Handle attr(H5Acreate2(obj.get(), name.c_str(), file_type, space.get(), H5P_DEFAULT, H5P_DEFAULT),
+              H5Aclose);
+  static const std::int64_t dummy = 0;  // an empty vector's data() may be null; HDF5 refuses null buffers
+  if (!attr.valid() || H5Awrite(attr.get(), mem_type, data ? data : &dummy) < 0)
+    throw_write(file.path(), describe(object, name));
 }
 
 struct OpenAttribute {
@@ -155,7 +158,8 @@ struct OpenAttribute {
 OpenAttribute open_attribute(const File& file, const std::string& object, const std::string& name) {
   OpenAttribute a;
   const std::string obj_path = normalise(object);
-  if (!file.exists(obj_path)) throw_read(file.path(), "no object '" + obj_path + "' (looking for attribute '" + name + "')");
+  if (!file.exists(obj_path))
+    throw_read(file.path(), "no object '" + obj_path + "' (looking for attribute '" + name + "')");
   a.obj = Handle(H5Oopen(file.id(), obj_path.c_str(), H5P_DEFAULT), H5Oclose);
   if (!a.obj.valid()) throw_read(file.path(), "cannot open '" + obj_path + "' (" + hdf5_error_text() + ")");
   if (H5Aexists(a.obj.get(), name.c_str()) <= 0) {
@@ -163,7 +167,8 @@ OpenAttribute open_attribute(const File& file, const std::string& object, const 
     throw_read(file.path(), "no " + describe(object, name));
   }
   a.attr = Handle(H5Aopen(a.obj.get(), name.c_str(), H5P_DEFAULT), H5Aclose);
-  if (!a.attr.valid()) throw_read(file.path(), "cannot open " + describe(object, name) + " (" + hdf5_error_text() + ")");
+  if (!a.attr.valid())
+    throw_read(file.path(), "cannot open " + describe(object, name) + " (" + hdf5_error_text() + ")");
   a.space = Handle(H5Aget_space(a.attr.get()), H5Sclose);
   a.type = Handle(H5Aget_type(a.attr.get()), H5Tclose);
   a.points = H5Sget_select_npoints(a.space.get());
@@ -184,16 +189,20 @@ std::vector<T> read_numeric_attribute(const File& file, const std::string& objec
 }
 
 template <class T>
-T read_scalar_attribute(const File& file, const std::string& object, const std::string& name, hid_t mem_type) {
+T read_scalar_attribute(const File& file, const std::string& object, const std::string& name,
+                        hid_t mem_type) {
   std::vector<T> v = read_numeric_attribute<T>(file, object, name, mem_type);
   if (v.size() != 1)
-    throw_read(file.path(), describe(object, name) + " has " + std::to_string(v.size()) + " values, expected 1");
+    throw_read(file.path(),
+               describe(object, name) + " has " + std::to_string(v.size()) + " values, expected 1");
   return v.front();
 }
 
-std::vector<std::string> read_string_attribute(const File& file, const std::string& object, const std::string& name) {
+std::vector<std::string> read_string_attribute(const File& file, const std::string& object,
+                                               const std::string& name) {
   OpenAttribute a = open_attribute(file, object, name);
-  if (H5Tget_class(a.type.get()) != H5T_STRING) throw_read(file.path(), describe(object, name) + " is not a string");
+  if (H5Tget_class(a.type.get()) != H5T_STRING)
+    throw_read(file.path(), describe(object, name) + " is not a string");
   const auto n = static_cast<std::size_t>(std::max<hssize_t>(a.points, 0));
   std::vector<std::string> out;
   out.reserve(n);
@@ -272,8 +281,9 @@ void write_hyperslab(File& file, const std::string& name, hid_t mem_type, hid_t 
     Handle lcpl(H5Pcreate(H5P_LINK_CREATE), H5Pclose);
     H5Pset_create_intermediate_group(lcpl.get(), 1);
     Handle space = simple_space(dims);
-    ds = Handle(H5Dcreate2(file.id(), path.c_str(), file_type, space.get(), lcpl.get(), H5P_DEFAULT, H5P_DEFAULT),
-                H5Dclose);
+    ds = Handle(
+        H5Dcreate2(file.id(), path.c_str(), file_type, space.get(), lcpl.get(), H5P_DEFAULT, H5P_DEFAULT),
+        H5Dclose);
     if (!ds.valid()) throw_write(file.path(), "dataset '" + path + "' (create)");
   }
   if (product(global_dims) == 0) return;  // nothing to transfer on any rank
@@ -305,10 +315,11 @@ void write_rows_impl(File& file, const std::string& name, const T* local, std::i
   MPI_Comm_rank(file.comm(), &rank);
   if (rank == 0) first = 0;  // MPI_Exscan leaves rank 0's result undefined
   if (any_rank(file.comm(), local_rows < 0 || cols < 1))
-    throw RunError(file.path() + ": cannot write dataset '" + normalise(name) + "': negative row count or width < 1");
+    throw RunError(file.path() + ": cannot write dataset '" + normalise(name) +
+                   "': negative row count or width < 1");
   const auto c = static_cast<std::uint64_t>(cols);
-  std::vector<std::uint64_t> dims{static_cast<std::uint64_t>(total)}, offset{static_cast<std::uint64_t>(first)},
-      count{static_cast<std::uint64_t>(rows)};
+  std::vector<std::uint64_t> dims{static_cast<std::uint64_t>(total)},
+      offset{static_cast<std::uint64_t>(first)}, count{static_cast<std::uint64_t>(rows)};
   if (cols > 1) {
     dims.push_back(c);
     offset.push_back(0);
@@ -319,7 +330,8 @@ void write_rows_impl(File& file, const std::string& name, const T* local, std::i
 
 template <class T>
 std::vector<T> read_selection(const File& file, const std::string& name, hid_t mem_type,
-                              const std::vector<std::uint64_t>* offset, const std::vector<std::uint64_t>* count) {
+                              const std::vector<std::uint64_t>* offset,
+                              const std::vector<std::uint64_t>* count) {
   Handle ds = open_dataset(file, name);
   const std::vector<hsize_t> dims = dataset_dims(ds);
   const std::string path = normalise(name);
@@ -327,7 +339,8 @@ std::vector<T> read_selection(const File& file, const std::string& name, hid_t m
     Handle type(H5Dget_type(ds.get()), H5Tclose);
     return H5Tget_class(type.get());
   }();
-  if (cls != H5T_INTEGER && cls != H5T_FLOAT) throw_read(file.path(), "dataset '" + path + "' is not numeric");
+  if (cls != H5T_INTEGER && cls != H5T_FLOAT)
+    throw_read(file.path(), "dataset '" + path + "' is not numeric");
   Handle file_space(H5Dget_space(ds.get()), H5Sclose);
   std::uint64_t points = 1;
   Handle mem_space;
@@ -359,15 +372,17 @@ std::vector<T> read_selection(const File& file, const std::string& name, hid_t m
 }
 
 template <class T>
-std::vector<T> read_rows_impl(const File& file, const std::string& name, std::int64_t first_row, std::int64_t rows,
-                              hid_t mem_type) {
+std::vector<T> read_rows_impl(const File& file, const std::string& name, std::int64_t first_row,
+                              std::int64_t rows, hid_t mem_type) {
   const std::vector<std::uint64_t> dims = file.dims(name);
   if (dims.empty() || dims.size() > 2)
     throw_read(file.path(), "dataset '" + normalise(name) + "' is not a 1-D or 2-D array of rows");
   if (first_row < 0 || rows < 0 || static_cast<std::uint64_t>(first_row + rows) > dims[0])
     throw_read(file.path(), "rows [" + std::to_string(first_row) + ", " + std::to_string(first_row + rows) +
-                                ") outside dataset '" + normalise(name) + "' with " + std::to_string(dims[0]) + " rows");
-  std::vector<std::uint64_t> offset{static_cast<std::uint64_t>(first_row)}, count{static_cast<std::uint64_t>(rows)};
+                                ") outside dataset '" + normalise(name) + "' with " +
+                                std::to_string(dims[0]) + " rows");
+  std::vector<std::uint64_t> offset{static_cast<std::uint64_t>(first_row)},
+      count{static_cast<std::uint64_t>(rows)};
   if (dims.size() == 2) {
     offset.push_back(0);
     count.push_back(dims[1]);
@@ -379,8 +394,8 @@ template <class T>
 void write_replicated_impl(File& file, const std::string& name, const std::vector<T>& data,
                            const std::vector<std::uint64_t>& dims, hid_t mem_type, hid_t file_type) {
   if (any_rank(file.comm(), product(dims) != data.size()))
-    throw RunError(file.path() + ": cannot write dataset '" + normalise(name) + "': " + std::to_string(data.size()) +
-                   " values do not match its dimensions");
+    throw RunError(file.path() + ": cannot write dataset '" + normalise(name) +
+                   "': " + std::to_string(data.size()) + " values do not match its dimensions");
   int rank = 0;
   MPI_Comm_rank(file.comm(), &rank);
   const std::vector<std::uint64_t> offset(dims.size(), 0);
@@ -477,11 +492,13 @@ void File::set_attr(const std::string& object, const std::string& name, const st
   const std::vector<hsize_t> dims{value.size()};
   write_attribute(*this, object, name, H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, &dims, value.data());
 }
-void File::set_attr(const std::string& object, const std::string& name, const std::vector<std::int64_t>& value) {
+void File::set_attr(const std::string& object, const std::string& name,
+                    const std::vector<std::int64_t>& value) {
   const std::vector<hsize_t> dims{value.size()};
   write_attribute(*this, object, name, H5T_STD_I64LE, H5T_NATIVE_INT64, &dims, value.data());
 }
-void File::set_attr(const std::string& object, const std::string& name, const std::vector<std::string>& value) {
+void File::set_attr(const std::string& object, const std::string& name,
+                    const std::vector<std::string>& value) {
   Handle type = utf8_string_type();
   std::vector<const char*> texts;
   texts.reserve(value.size());
@@ -558,11 +575,13 @@ std::vector<std::uint64_t> File::dims(const std::string& dataset) const {
 void File::write_rows(const std::string& dataset, const double* local, std::int64_t local_rows, int cols) {
   write_rows_impl(*this, dataset, local, local_rows, cols, H5T_NATIVE_DOUBLE, H5T_IEEE_F64LE);
 }
-void File::write_rows(const std::string& dataset, const std::int64_t* local, std::int64_t local_rows, int cols) {
+void File::write_rows(const std::string& dataset, const std::int64_t* local, std::int64_t local_rows,
+                      int cols) {
   write_rows_impl(*this, dataset, local, local_rows, cols, H5T_NATIVE_INT64, H5T_STD_I64LE);
 }
 
-std::vector<double> File::read_rows_double(const std::string& dataset, std::int64_t first_row, std::int64_t rows) const {
+std::vector<double> File::read_rows_double(const std::string& dataset, std::int64_t first_row,
+                                           std::int64_t rows) const {
   return read_rows_impl<double>(*this, dataset, first_row, rows, H5T_NATIVE_DOUBLE);
 }
 std::vector<std::int64_t> File::read_rows_int(const std::string& dataset, std::int64_t first_row,
@@ -576,7 +595,8 @@ std::vector<std::int64_t> File::read_int(const std::string& dataset) const {
   return read_selection<std::int64_t>(*this, dataset, H5T_NATIVE_INT64, nullptr, nullptr);
 }
 
-void File::write_block(const std::string& dataset, const double* local, const std::vector<std::uint64_t>& global_dims,
+void File::write_block(const std::string& dataset, const double* local,
+                       const std::vector<std::uint64_t>& global_dims,
                        const std::vector<std::uint64_t>& offset, const std::vector<std::uint64_t>& count) {
   write_hyperslab(*this, dataset, H5T_NATIVE_DOUBLE, H5T_IEEE_F64LE, global_dims, offset, count, local);
 }
@@ -595,7 +615,8 @@ void File::write_replicated(const std::string& dataset, const std::vector<std::i
   write_replicated_impl(*this, dataset, data, dims, H5T_NATIVE_INT64, H5T_STD_I64LE);
 }
 
-// ---- free functions ----------------------------------------------------------------------------------------
+// ---- free functions
+// ----------------------------------------------------------------------------------------
 
 void write_atomically(const std::string& final_path, MPI_Comm comm, const std::function<void(File&)>& body) {
   const std::string tmp_path = final_path + ".tmp";

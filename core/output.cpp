@@ -17,8 +17,12 @@
 namespace cgd::schema {
 namespace {
 
-std::vector<double> as_vector(const Vec3& v) { return {v.begin(), v.end()}; }
-std::vector<std::int64_t> as_vector(const std::array<int, 3>& v) { return {v.begin(), v.end()}; }
+std::vector<double> as_vector(const Vec3& v) {
+  return {v.begin(), v.end()};
+}
+std::vector<std::int64_t> as_vector(const std::array<int, 3>& v) {
+  return {v.begin(), v.end()};
+}
 
 /// UTC now as ISO 8601 ("2025-01-31T12:00:00Z"), taken on rank 0 so every rank writes the same text.
 std::string utc_now_iso8601(MPI_Comm comm) {
@@ -140,8 +144,8 @@ void write_common(h5::File& file, const char* format, const Scene& scene) {
   write_params(file, scene);
 }
 
-void write_snapshot(const std::string& path, MPI_Comm comm, const Scene& scene, double time_s, std::int64_t step,
-                    const ParticleFields& particles, const FluidFields* fluid) {
+void write_snapshot(const std::string& path, MPI_Comm comm, const Scene& scene, double time_s,
+                    std::int64_t step, const ParticleFields& particles, const FluidFields* fluid) {
   const ParticleArray arrays[] = {
       {"position", particles.position, 3, "m", true},
       {"velocity", particles.velocity, 3, "m/s", true},
@@ -180,7 +184,8 @@ void write_snapshot(const std::string& path, MPI_Comm comm, const Scene& scene, 
   for (int i = 0; i < kArrays; ++i) {
     const bool any_given = global[2 * i], missing_somewhere = global[2 * i + 1];
     if (missing_somewhere && (arrays[i].required || any_given))
-      problem = std::string("particle array '") + arrays[i].name + "' is missing on a rank that owns particles";
+      problem =
+          std::string("particle array '") + arrays[i].name + "' is missing on a rank that owns particles";
   }
   if (global[2 * kArrays]) problem = "particle array 'id' is missing on a rank that owns particles";
   if (global[2 * kArrays + 1]) problem = "negative particle count";
@@ -210,9 +215,10 @@ void write_snapshot(const std::string& path, MPI_Comm comm, const Scene& scene, 
       f.write_rows(name, arrays[i].data, particles.count, arrays[i].width);
       f.set_attr(name, "unit", std::string(arrays[i].unit));
     }
-    const bool wrote_pressure_gradient = std::any_of(std::begin(arrays), std::end(arrays), [&](const ParticleArray& a) {
-      return std::strcmp(a.name, "pressure_gradient") == 0 && global[2 * (&a - arrays)];
-    });
+    const bool wrote_pressure_gradient =
+        std::any_of(std::begin(arrays), std::end(arrays), [&](const ParticleArray& a) {
+          return std::strcmp(a.name, "pressure_gradient") == 0 && global[2 * (&a - arrays)];
+        });
     if (wrote_pressure_gradient)  // record the mean that was removed from it
       f.set_attr("/particles", "pressure_gradient_mean", as_vector(particles.pressure_gradient_mean));
 
@@ -220,12 +226,14 @@ void write_snapshot(const std::string& path, MPI_Comm comm, const Scene& scene, 
       const auto n = fluid->cells;  // (n_x, n_y, n_z)
       const auto nx = static_cast<std::uint64_t>(n[0]), ny = static_cast<std::uint64_t>(n[1]),
                  nz = static_cast<std::uint64_t>(n[2]);
-      const auto y0 = static_cast<std::uint64_t>(fluid->y_offset), yc = static_cast<std::uint64_t>(fluid->y_count);
+      const auto y0 = static_cast<std::uint64_t>(fluid->y_offset),
+                 yc = static_cast<std::uint64_t>(fluid->y_count);
       f.create_group("/fluid");
       f.set_attr("/fluid", "cells", as_vector(fluid->cells));
       f.set_attr("/fluid", "spacing", as_vector(fluid->spacing_m));
       f.set_attr("/fluid", "origin", as_vector(fluid->origin_m));
-      f.set_attr("/fluid", "layout", std::string("arrays (n_z, n_y, n_x[, 3]), x fastest; cells, spacing, origin as (x, y, z)"));
+      f.set_attr("/fluid", "layout",
+                 std::string("arrays (n_z, n_y, n_x[, 3]), x fastest; cells, spacing, origin as (x, y, z)"));
       f.write_block("/fluid/void_fraction", fluid->void_fraction, {nz, ny, nx}, {0, y0, 0}, {nz, yc, nx});
       f.set_attr("/fluid/void_fraction", "unit", std::string("1"));
       f.write_block("/fluid/velocity", fluid->velocity, {nz, ny, nx, 3}, {0, y0, 0, 0}, {nz, yc, nx, 3});
@@ -241,9 +249,11 @@ void write_snapshot(const std::string& path, MPI_Comm comm, const Scene& scene, 
 void Series::add_column(const std::string& name, int width, const std::string& unit) {
   if (rows_ > 0) throw std::logic_error("Series::add_column('" + name + "') after rows were appended");
   if (name.empty() || name.find('/') != std::string::npos || width < 1)
-    throw std::invalid_argument("Series::add_column: bad column '" + name + "' of width " + std::to_string(width));
+    throw std::invalid_argument("Series::add_column: bad column '" + name + "' of width " +
+                                std::to_string(width));
   for (const Column& c : columns_)
-    if (c.name == name) throw std::invalid_argument("Series::add_column: column '" + name + "' declared twice");
+    if (c.name == name)
+      throw std::invalid_argument("Series::add_column: column '" + name + "' declared twice");
   columns_.push_back(Column{name, unit, width, {}});
 }
 
@@ -256,8 +266,8 @@ int Series::row_width() const {
 void Series::append(const std::vector<double>& row) {
   if (columns_.empty()) throw std::logic_error("Series::append before any column was declared");
   if (static_cast<int>(row.size()) != row_width())
-    throw std::invalid_argument("Series::append: row of " + std::to_string(row.size()) + " values, expected " +
-                                std::to_string(row_width()));
+    throw std::invalid_argument("Series::append: row of " + std::to_string(row.size()) +
+                                " values, expected " + std::to_string(row_width()));
   auto it = row.begin();
   for (Column& c : columns_) {
     c.values.insert(c.values.end(), it, it + c.width);
@@ -277,7 +287,8 @@ void Series::truncate_after(double time_s) {
     std::vector<double> values;
     values.reserve(kept * c.width);
     for (std::size_t r = 0; r < rows_; ++r)
-      if (keep[r]) values.insert(values.end(), c.values.begin() + r * c.width, c.values.begin() + (r + 1) * c.width);
+      if (keep[r])
+        values.insert(values.end(), c.values.begin() + r * c.width, c.values.begin() + (r + 1) * c.width);
     c.values = std::move(values);
   }
   rows_ = kept;

@@ -13,6 +13,7 @@
 // Every error is an InputError: "<file>: <section.key> = <value given>: <what is allowed>".
 #include "core/scene.hpp"
 
+#include <toml++/toml.h>
 #include <algorithm>
 #include <cerrno>
 #include <charconv>
@@ -23,7 +24,6 @@
 #include <fstream>
 #include <set>
 #include <sstream>
-#include <toml++/toml.h>
 
 #include "core/error.hpp"
 #include "core/scales.hpp"
@@ -32,28 +32,38 @@ namespace cgd {
 
 const char* to_string(ContactModel m) {
   switch (m) {
-    case ContactModel::SpringDashpot: return "spring-dashpot";
-    case ContactModel::None: return "none";
+    case ContactModel::SpringDashpot:
+      return "spring-dashpot";
+    case ContactModel::None:
+      return "none";
   }
   return "?";
 }
 
 const char* to_string(Coupling c) {
   switch (c) {
-    case Coupling::TwoWay: return "two-way";
-    case Coupling::OneWay: return "one-way";
-    case Coupling::Quiescent: return "quiescent";
+    case Coupling::TwoWay:
+      return "two-way";
+    case Coupling::OneWay:
+      return "one-way";
+    case Coupling::Quiescent:
+      return "quiescent";
   }
   return "?";
 }
 
 const char* to_string(DragLaw d) {
   switch (d) {
-    case DragLaw::Beetstra: return "beetstra";
-    case DragLaw::WenYu: return "wen-yu";
-    case DragLaw::Stokes: return "stokes";
-    case DragLaw::Radl2014: return "radl2014";
-    case DragLaw::Model: return "model";
+    case DragLaw::Beetstra:
+      return "beetstra";
+    case DragLaw::WenYu:
+      return "wen-yu";
+    case DragLaw::Stokes:
+      return "stokes";
+    case DragLaw::Radl2014:
+      return "radl2014";
+    case DragLaw::Model:
+      return "model";
   }
   return "?";
 }
@@ -227,11 +237,21 @@ std::string quote(std::string_view s) {
   std::string out = "\"";
   for (const char c : s) {
     switch (c) {
-      case '"': out += "\\\""; break;
-      case '\\': out += "\\\\"; break;
-      case '\n': out += "\\n"; break;
-      case '\t': out += "\\t"; break;
-      case '\r': out += "\\r"; break;
+      case '"':
+        out += "\\\"";
+        break;
+      case '\\':
+        out += "\\\\";
+        break;
+      case '\n':
+        out += "\\n";
+        break;
+      case '\t':
+        out += "\\t";
+        break;
+      case '\r':
+        out += "\\r";
+        break;
       default:
         if (static_cast<unsigned char>(c) < 0x20) {
           char hex[8];
@@ -285,12 +305,18 @@ std::string emit_scene(const toml::table& root) {
 
 std::string kind_text(Kind kind) {
   switch (kind) {
-    case Kind::Number: return "a number";
-    case Kind::Integer: return "an integer";
-    case Kind::Boolean: return "true or false";
-    case Kind::String: return "a string";
-    case Kind::Vec3Number: return "an array of 3 numbers [x, y, z]";
-    case Kind::Vec3Integer: return "an array of 3 integers [x, y, z]";
+    case Kind::Number:
+      return "a number";
+    case Kind::Integer:
+      return "an integer";
+    case Kind::Boolean:
+      return "true or false";
+    case Kind::String:
+      return "a string";
+    case Kind::Vec3Number:
+      return "an array of 3 numbers [x, y, z]";
+    case Kind::Vec3Integer:
+      return "an array of 3 integers [x, y, z]";
   }
   return "?";
 }
@@ -308,10 +334,14 @@ double as_double(const toml::node& node) {
 
 bool has_kind(const toml::node& node, Kind kind) {
   switch (kind) {
-    case Kind::Number: return is_finite_number(node);
-    case Kind::Integer: return node.is_integer();
-    case Kind::Boolean: return node.is_boolean();
-    case Kind::String: return node.is_string();
+    case Kind::Number:
+      return is_finite_number(node);
+    case Kind::Integer:
+      return node.is_integer();
+    case Kind::Boolean:
+      return node.is_boolean();
+    case Kind::String:
+      return node.is_string();
     case Kind::Vec3Number:
     case Kind::Vec3Integer: {
       const auto* a = node.as_array();
@@ -333,7 +363,8 @@ class SceneReader {
   [[noreturn]] void fail(const std::string& message) const { throw InputError(origin_ + ": " + message); }
 
   /// "file: section.key = value (from --set): rule"
-  [[noreturn]] void fail_value(std::string_view section, std::string_view key, const std::string& rule) const {
+  [[noreturn]] void fail_value(std::string_view section, std::string_view key,
+                               const std::string& rule) const {
     const std::string name = std::string(section) + "." + std::string(key);
     const toml::node* n = node(section, key);
     std::string message = name + " = " + (n ? format_node(*n) : std::string("?"));
@@ -354,13 +385,15 @@ class SceneReader {
       const std::string_view section_name = section_key.str();
       const SectionSpec* section = find_section(section_name);
       if (!section_node.is_table()) {
-        if (section) fail(std::string(section_name) + " = " + format_node(section_node) + ": must be a section [" +
-                          std::string(section_name) + "]");
+        if (section)
+          fail(std::string(section_name) + " = " + format_node(section_node) + ": must be a section [" +
+               std::string(section_name) + "]");
         // a bare key at the top level: perhaps a key that belongs in a section
         std::string message = "unknown top-level key " + std::string(section_name);
         for (const auto& s : schema())
           if (find_key(s, section_name)) {
-            message += "; did you mean " + std::string(s.name) + "." + std::string(section_name) + " (in [" + s.name + "])?";
+            message += "; did you mean " + std::string(s.name) + "." + std::string(section_name) + " (in [" +
+                       s.name + "])?";
             break;
           }
         fail(message + " (every key belongs in a section: " + join(section_names(), ", ") + ")");
@@ -398,9 +431,11 @@ class SceneReader {
     fail_missing(section, key, "");
   }
 
-  [[noreturn]] void fail_missing(std::string_view section, std::string_view key, const std::string& why) const {
+  [[noreturn]] void fail_missing(std::string_view section, std::string_view key,
+                                 const std::string& why) const {
     const KeySpec& spec = key_spec(section, key);
-    fail(std::string(section) + "." + std::string(key) + " is missing: required" + why + " (" + spec.meaning + ")");
+    fail(std::string(section) + "." + std::string(key) + " is missing: required" + why + " (" + spec.meaning +
+         ")");
   }
 
   std::optional<Vec3> vec3(std::string_view section, std::string_view key) const {
@@ -435,11 +470,13 @@ class SceneReader {
 
   // Range-checked numbers: `rule` is the allowed range as shown to the user.
   double positive(std::string_view section, std::string_view key, double value) const {
-    if (!(value > 0.0)) fail_value(section, key, "must be > 0 (" + std::string(key_spec(section, key).meaning) + ")");
+    if (!(value > 0.0))
+      fail_value(section, key, "must be > 0 (" + std::string(key_spec(section, key).meaning) + ")");
     return value;
   }
   double non_negative(std::string_view section, std::string_view key, double value) const {
-    if (!(value >= 0.0)) fail_value(section, key, "must be >= 0 (" + std::string(key_spec(section, key).meaning) + ")");
+    if (!(value >= 0.0))
+      fail_value(section, key, "must be >= 0 (" + std::string(key_spec(section, key).meaning) + ")");
     return value;
   }
   /// lower < value <= upper (or < upper when !upper_inclusive)
@@ -448,14 +485,14 @@ class SceneReader {
     const bool ok = value > lower && (upper_inclusive ? value <= upper : value < upper);
     if (!ok)
       fail_value(section, key,
-                 "must be in (" + format_short(lower) + ", " + format_short(upper) + (upper_inclusive ? "]" : ")") +
-                     " (" + key_spec(section, key).meaning + why + ")");
+                 "must be in (" + format_short(lower) + ", " + format_short(upper) +
+                     (upper_inclusive ? "]" : ")") + " (" + key_spec(section, key).meaning + why + ")");
     return value;
   }
 
   template <typename Enum>
-  Enum choice(std::string_view section, std::string_view key, const std::vector<std::pair<std::string, Enum>>& choices,
-              Enum fallback) const {
+  Enum choice(std::string_view section, std::string_view key,
+              const std::vector<std::pair<std::string, Enum>>& choices, Enum fallback) const {
     const auto given = string(section, key);
     if (!given) return fallback;
     std::vector<std::string> names;
@@ -494,14 +531,17 @@ std::string trim(std::string_view s) {
 /// Applies one "section.key=value"; returns "section.key".
 std::string apply_override(toml::table& root, const std::string& text, const std::string& origin) {
   const std::string shown = "--set " + text;
-  const auto fail = [&](const std::string& why) -> void { throw InputError(origin + ": " + shown + ": " + why); };
+  const auto fail = [&](const std::string& why) -> void {
+    throw InputError(origin + ": " + shown + ": " + why);
+  };
   const auto eq = text.find('=');
   if (eq == std::string::npos) fail("expected SECTION.KEY=VALUE, e.g. --set particles.solids_fraction=0.2");
   const std::string name = trim(std::string_view(text).substr(0, eq));
   const std::string value_text = trim(std::string_view(text).substr(eq + 1));
   const auto dot = name.find('.');
   if (dot == std::string::npos || dot == 0 || dot + 1 == name.size())
-    fail("the key must be SECTION.KEY (sections: " + join(section_names(), ", ") + "), e.g. --set particles.solids_fraction=0.2");
+    fail("the key must be SECTION.KEY (sections: " + join(section_names(), ", ") +
+         "), e.g. --set particles.solids_fraction=0.2");
   const std::string section_name = name.substr(0, dot);
   const std::string key_name = name.substr(dot + 1);
   const SectionSpec* section = find_section(section_name);
@@ -541,7 +581,9 @@ std::string apply_override(toml::table& root, const std::string& text, const std
 
 // ---- the scene -----------------------------------------------------------------------------------
 
-double norm(const Vec3& v) { return std::sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]); }
+double norm(const Vec3& v) {
+  return std::sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
+}
 
 Scene build_scene(const SceneReader& in) {
   Scene s;
@@ -550,13 +592,17 @@ Scene build_scene(const SceneReader& in) {
   ParticlesConfig& p = s.particles;
   p.diameter_m = in.positive("particles", "diameter", in.required("particles", "diameter"));
   p.density_kg_m3 = in.positive("particles", "density", in.required("particles", "density"));
-  p.solids_fraction = in.in_range("particles", "solids_fraction", in.required("particles", "solids_fraction"), 0.0,
-                                  0.64, false, "; 0.64 is random close packing: more particles would not fit");
+  p.solids_fraction =
+      in.in_range("particles", "solids_fraction", in.required("particles", "solids_fraction"), 0.0, 0.64,
+                  false, "; 0.64 is random close packing: more particles would not fit");
   if (auto v = in.number("particles", "parcel_size")) {
-    if (!(*v >= 1.0)) in.fail_value("particles", "parcel_size", "must be >= 1 (alpha = d_parcel / d_prim; 1: every particle resolved)");
+    if (!(*v >= 1.0))
+      in.fail_value("particles", "parcel_size",
+                    "must be >= 1 (alpha = d_parcel / d_prim; 1: every particle resolved)");
     p.parcel_size = *v;
   }
-  if (auto v = in.number("particles", "velocity_rms")) p.velocity_rms_m_s = in.non_negative("particles", "velocity_rms", *v);
+  if (auto v = in.number("particles", "velocity_rms"))
+    p.velocity_rms_m_s = in.non_negative("particles", "velocity_rms", *v);
   if (auto v = in.integer("particles", "seed")) {
     if (*v < 0) in.fail_value("particles", "seed", "must be an integer >= 0");
     p.seed = static_cast<std::uint64_t>(*v);
@@ -567,17 +613,21 @@ Scene build_scene(const SceneReader& in) {
   // [domain]
   const bool has_size_dp = in.has("domain", "size_dp"), has_size = in.has("domain", "size");
   if (has_size_dp && has_size)
-    in.fail_value("domain", "size", "give either domain.size (m) or domain.size_dp (primary diameters), not both");
+    in.fail_value("domain", "size",
+                  "give either domain.size (m) or domain.size_dp (primary diameters), not both");
   if (!has_size_dp && !has_size)
-    in.fail("domain.size_dp is missing: required, the box edges [x, y, z] in primary diameters (or domain.size in m)");
+    in.fail(
+        "domain.size_dp is missing: required, the box edges [x, y, z] in primary diameters (or domain.size "
+        "in m)");
   const char* size_key = has_size_dp ? "size_dp" : "size";
   const Vec3 size_given = *in.vec3("domain", size_key);
   for (int i = 0; i < 3; ++i) {
     const double edge_m = has_size_dp ? size_given[i] * d : size_given[i];
     s.domain.size_m[i] = edge_m;
     if (!(edge_m >= 4.0 * parcel_d)) {
-      const std::string minimum = has_size_dp ? SceneReader::format_short(4.0 * p.parcel_size) + " primary diameters"
-                                              : SceneReader::format_short(4.0 * parcel_d) + " m";
+      const std::string minimum = has_size_dp
+                                      ? SceneReader::format_short(4.0 * p.parcel_size) + " primary diameters"
+                                      : SceneReader::format_short(4.0 * parcel_d) + " m";
       in.fail_value("domain", size_key,
                     "every edge must be >= 4 parcel diameters (4 alpha d_p = " + minimum + "); edge " +
                         "xyz"[i] + " is too small");
@@ -589,18 +639,23 @@ Scene build_scene(const SceneReader& in) {
   // [contact]
   ContactConfig& c = s.contact;
   c.model = in.choice<ContactModel>(
-      "contact", "model", {{"spring-dashpot", ContactModel::SpringDashpot}, {"none", ContactModel::None}}, c.model);
+      "contact", "model", {{"spring-dashpot", ContactModel::SpringDashpot}, {"none", ContactModel::None}},
+      c.model);
   if (auto v = in.number("contact", "gamma_star")) c.gamma_star = in.positive("contact", "gamma_star", *v);
   if (auto v = in.number("contact", "stiffness")) c.stiffness_n_N_m = in.positive("contact", "stiffness", *v);
-  if (auto v = in.number("contact", "t_star")) c.t_star = in.in_range("contact", "t_star", *v, 0.0, 0.2, true);
-  if (auto v = in.number("contact", "restitution")) c.restitution = in.in_range("contact", "restitution", *v, 0.0, 1.0, true);
+  if (auto v = in.number("contact", "t_star"))
+    c.t_star = in.in_range("contact", "t_star", *v, 0.0, 0.2, true);
+  if (auto v = in.number("contact", "restitution"))
+    c.restitution = in.in_range("contact", "restitution", *v, 0.0, 1.0, true);
   if (auto v = in.number("contact", "friction")) c.friction = in.non_negative("contact", "friction", *v);
   if (auto v = in.number("contact", "kn_over_kt")) c.kn_over_kt = in.positive("contact", "kn_over_kt", *v);
   if (auto v = in.number("contact", "gamman_over_gammat"))
     c.gamman_over_gammat = in.positive("contact", "gamman_over_gammat", *v);
-  if (auto v = in.number("contact", "skin_over_dp")) c.skin_over_dp = in.non_negative("contact", "skin_over_dp", *v);
+  if (auto v = in.number("contact", "skin_over_dp"))
+    c.skin_over_dp = in.non_negative("contact", "skin_over_dp", *v);
   if (c.gamma_star && c.stiffness_n_N_m)
-    in.fail_value("contact", "stiffness", "give either contact.gamma_star or contact.stiffness (N/m), not both");
+    in.fail_value("contact", "stiffness",
+                  "give either contact.gamma_star or contact.stiffness (N/m), not both");
   if (c.model != ContactModel::None && !c.gamma_star && !c.stiffness_n_N_m)
     in.fail(std::string("contact.stiffness is missing: with contact.model = \"") + to_string(c.model) +
             "\" give contact.stiffness (N/m) or contact.gamma_star (dimensionless, needs a [fluid] section)");
@@ -610,13 +665,16 @@ Scene build_scene(const SceneReader& in) {
     FluidConfig f;
     if (auto v = in.number("fluid", "density")) f.density_kg_m3 = in.positive("fluid", "density", *v);
     if (!(f.density_kg_m3 < p.density_kg_m3))
-      in.fail_value("fluid", "density", "must be < particles.density = " + SceneReader::format_short(p.density_kg_m3) +
-                                            " kg/m^3 (the particles must sink)");
+      in.fail_value("fluid", "density",
+                    "must be < particles.density = " + SceneReader::format_short(p.density_kg_m3) +
+                        " kg/m^3 (the particles must sink)");
     if (auto v = in.number("fluid", "viscosity")) f.viscosity_Pa_s = in.positive("fluid", "viscosity", *v);
-    if (auto v = in.number("fluid", "courant")) f.courant = in.in_range("fluid", "courant", *v, 0.0, 1.0, true);
+    if (auto v = in.number("fluid", "courant"))
+      f.courant = in.in_range("fluid", "courant", *v, 0.0, 1.0, true);
     f.coupling = in.choice<Coupling>(
         "fluid", "coupling",
-        {{"two-way", Coupling::TwoWay}, {"one-way", Coupling::OneWay}, {"quiescent", Coupling::Quiescent}}, f.coupling);
+        {{"two-way", Coupling::TwoWay}, {"one-way", Coupling::OneWay}, {"quiescent", Coupling::Quiescent}},
+        f.coupling);
     f.drag = in.choice<DragLaw>("fluid", "drag",
                                 {{"beetstra", DragLaw::Beetstra},
                                  {"wen-yu", DragLaw::WenYu},
@@ -627,11 +685,13 @@ Scene build_scene(const SceneReader& in) {
     if (auto v = in.boolean("fluid", "pressure_gradient_force")) f.pressure_gradient_force = *v;
     const bool has_cells = in.has("fluid", "cells"), has_dx = in.has("fluid", "dx_over_dp");
     if (has_cells && has_dx)
-      in.fail_value("fluid", "dx_over_dp", "give either fluid.cells or fluid.dx_over_dp (cell size in primary diameters), not both");
+      in.fail_value("fluid", "dx_over_dp",
+                    "give either fluid.cells or fluid.dx_over_dp (cell size in primary diameters), not both");
     if (auto cells = in.ivec3("fluid", "cells")) {
       for (int i = 0; i < 3; ++i) {
         if ((*cells)[i] < 1 || (*cells)[i] > 1'000'000)
-          in.fail_value("fluid", "cells", "every entry must be an integer in [1, 1000000] (fluid cells along x, y, z)");
+          in.fail_value("fluid", "cells",
+                        "every entry must be an integer in [1, 1000000] (fluid cells along x, y, z)");
         f.cells[i] = static_cast<int>((*cells)[i]);
       }
     }
@@ -642,28 +702,33 @@ Scene build_scene(const SceneReader& in) {
         if (!(n >= 1.0) || n > 1e6)
           in.fail_value("fluid", "dx_over_dp",
                         std::string("gives ") + SceneReader::format_short(n) + " cells along " + "xyz"[i] +
-                            "; the cell must be no larger than the box edge and there can be at most 1000000 cells per edge");
+                            "; the cell must be no larger than the box edge and there can be at most 1000000 "
+                            "cells per edge");
         f.cells[i] = static_cast<int>(n);
       }
     }
     if (f.coupling != Coupling::Quiescent && !has_cells && !has_dx)
       in.fail(std::string("fluid.cells is missing: required when the fluid is solved (fluid.coupling = \"") +
-              to_string(f.coupling) + "\"); give fluid.cells = [nx, ny, nz] or fluid.dx_over_dp (a quiescent fluid needs no grid)");
+              to_string(f.coupling) +
+              "\"); give fluid.cells = [nx, ny, nz] or fluid.dx_over_dp (a quiescent fluid needs no grid)");
     s.fluid = f;
   } else {
     if (c.gamma_star)
-      in.fail_value("contact", "gamma_star",
-                    "needs a [fluid] section: gamma* is defined with the terminal velocity u_t, which is undefined "
-                    "without a fluid; give contact.stiffness (N/m) instead");
+      in.fail_value(
+          "contact", "gamma_star",
+          "needs a [fluid] section: gamma* is defined with the terminal velocity u_t, which is undefined "
+          "without a fluid; give contact.stiffness (N/m) instead");
   }
 
   // [run]
   RunConfig& r = s.run;
   for (const char* key : {"end_time_tref", "dump_interval_tref", "series_interval_tref"})
     if (in.has("run", key) && !s.fluid)
-      in.fail_value("run", key, "needs a [fluid] section: t_ref = u_t/g is undefined without a fluid; give run." +
-                                    std::string(key).substr(0, std::string(key).size() - 5) + " in s instead");
-  if (auto v = in.number("run", "checkpoint_wall_s")) r.checkpoint_wall_s = in.positive("run", "checkpoint_wall_s", *v);
+      in.fail_value("run", key,
+                    "needs a [fluid] section: t_ref = u_t/g is undefined without a fluid; give run." +
+                        std::string(key).substr(0, std::string(key).size() - 5) + " in s instead");
+  if (auto v = in.number("run", "checkpoint_wall_s"))
+    r.checkpoint_wall_s = in.positive("run", "checkpoint_wall_s", *v);
   if (auto v = in.number("run", "dt")) r.dt_s = in.positive("run", "dt", *v);
 
   // ---- derived numbers (models.md) ----
@@ -677,7 +742,8 @@ Scene build_scene(const SceneReader& in) {
     const FluidConfig& f = *s.fluid;
     x.stokes_relaxation_s = p.density_kg_m3 * d * d / (18.0 * f.viscosity_Pa_s);
     if (g > 0.0) {
-      x.u_t_m_s = schiller_naumann_terminal_velocity(d, p.density_kg_m3, f.density_kg_m3, f.viscosity_Pa_s, g);
+      x.u_t_m_s =
+          schiller_naumann_terminal_velocity(d, p.density_kg_m3, f.density_kg_m3, f.viscosity_Pa_s, g);
       x.re_p = f.density_kg_m3 * d * x.u_t_m_s / f.viscosity_Pa_s;
       x.fr_p = x.u_t_m_s * x.u_t_m_s / (g * d);
       x.l_ref_m = x.u_t_m_s * x.u_t_m_s / g;
@@ -686,10 +752,12 @@ Scene build_scene(const SceneReader& in) {
     } else {
       for (const char* key : {"end_time_tref", "dump_interval_tref", "series_interval_tref"})
         if (in.has("run", key))
-          in.fail_value("run", key, "needs gravity: t_ref = u_t/g is undefined when domain.gravity = [0, 0, 0]");
+          in.fail_value("run", key,
+                        "needs gravity: t_ref = u_t/g is undefined when domain.gravity = [0, 0, 0]");
       if (c.gamma_star)
         in.fail_value("contact", "gamma_star",
-                      "needs gravity: gamma* = (g/u_t) sqrt(rho_p d^3/k_n) is undefined when domain.gravity = [0, 0, 0]; "
+                      "needs gravity: gamma* = (g/u_t) sqrt(rho_p d^3/k_n) is undefined when domain.gravity "
+                      "= [0, 0, 0]; "
                       "give contact.stiffness (N/m) instead");
     }
   }
@@ -698,25 +766,28 @@ Scene build_scene(const SceneReader& in) {
   const auto time_key = [&](const char* seconds_key, const char* tref_key, double fallback, bool required) {
     const bool has_s = in.has("run", seconds_key), has_t = in.has("run", tref_key);
     if (has_s && has_t)
-      in.fail_value("run", tref_key, std::string("give either run.") + seconds_key + " (s) or run." + tref_key + ", not both");
+      in.fail_value("run", tref_key,
+                    std::string("give either run.") + seconds_key + " (s) or run." + tref_key + ", not both");
     if (has_t) return in.non_negative("run", tref_key, *in.number("run", tref_key)) * x.t_ref_s;
     if (has_s) return in.non_negative("run", seconds_key, *in.number("run", seconds_key));
-    if (required) in.fail_missing("run", seconds_key, std::string(" (or run.") + tref_key + " with a [fluid] section)");
+    if (required)
+      in.fail_missing("run", seconds_key, std::string(" (or run.") + tref_key + " with a [fluid] section)");
     return fallback;
   };
   r.end_time_s = time_key("end_time", "end_time_tref", 0.0, true);
   if (!(r.end_time_s > 0.0))
-    in.fail_value("run", in.has("run", "end_time") ? "end_time" : "end_time_tref", "must be > 0 (simulated time)");
+    in.fail_value("run", in.has("run", "end_time") ? "end_time" : "end_time_tref",
+                  "must be > 0 (simulated time)");
   r.dump_interval_s = time_key("dump_interval", "dump_interval_tref", 0.0, false);
   r.series_interval_s = time_key("series_interval", "series_interval_tref", 0.0, false);
 
   if (s.has_contacts()) {
-    const double k_n_primary = c.stiffness_n_N_m
-                                   ? *c.stiffness_n_N_m
-                                   : stiffness_from_gamma_star(*c.gamma_star, p.density_kg_m3, d, g, x.u_t_m_s);
+    const double k_n_primary =
+        c.stiffness_n_N_m ? *c.stiffness_n_N_m
+                          : stiffness_from_gamma_star(*c.gamma_star, p.density_kg_m3, d, g, x.u_t_m_s);
     // models.md "Parcels": k_n,parcel = alpha k_n keeps restitution, relative overlap and t_c/(d/v).
-    const SpringDashpot sd = spring_dashpot(p.parcel_size * k_n_primary, c.restitution, x.parcel_mass_kg / 2.0,
-                                            c.kn_over_kt, c.gamman_over_gammat);
+    const SpringDashpot sd = spring_dashpot(p.parcel_size * k_n_primary, c.restitution,
+                                            x.parcel_mass_kg / 2.0, c.kn_over_kt, c.gamman_over_gammat);
     x.k_n_N_m = sd.k_n;
     x.k_t_N_m = sd.k_t;
     x.gamma_n_kg_s = sd.gamma_n;
@@ -733,8 +804,9 @@ Scene build_scene(const SceneReader& in) {
   } else if (s.fluid) {
     x.dt_dem_s = c.t_star * x.stokes_relaxation_s;  // no contacts: resolve the drag relaxation
   } else {
-    in.fail("run.dt is missing: required when contact.model = \"none\" and there is no [fluid] section "
-            "(nothing else sets the time step; s, explicit DEM time step)");
+    in.fail(
+        "run.dt is missing: required when contact.model = \"none\" and there is no [fluid] section "
+        "(nothing else sets the time step; s, explicit DEM time step)");
   }
 
   if (s.solves_fluid()) {
@@ -745,15 +817,18 @@ Scene build_scene(const SceneReader& in) {
   }
 
   const double box_volume = s.domain.size_m[0] * s.domain.size_m[1] * s.domain.size_m[2];
-  const double count = std::round(p.solids_fraction * box_volume / (std::pow(p.parcel_size, 3) * x.particle_volume_m3));
+  const double count =
+      std::round(p.solids_fraction * box_volume / (std::pow(p.parcel_size, 3) * x.particle_volume_m3));
   if (count < 1.0)
-    in.fail_value("particles", "solids_fraction", "gives no particle in a box of " + SceneReader::format_short(box_volume) +
-                                                      " m^3; raise it or enlarge the box");
+    in.fail_value("particles", "solids_fraction",
+                  "gives no particle in a box of " + SceneReader::format_short(box_volume) +
+                      " m^3; raise it or enlarge the box");
   if (count > 9e15) in.fail_value("particles", "solids_fraction", "gives more particles than can be counted");
   x.particle_count = static_cast<std::int64_t>(count);
   x.memory_estimate_bytes = count * 200.0;
   if (s.solves_fluid())
-    x.memory_estimate_bytes += 16.0 * sizeof(double) * double(x.cells[0]) * double(x.cells[1]) * double(x.cells[2]);
+    x.memory_estimate_bytes +=
+        16.0 * sizeof(double) * double(x.cells[0]) * double(x.cells[1]) * double(x.cells[2]);
   return s;
 }
 
@@ -808,9 +883,13 @@ std::string num(double v) {
   return buffer;
 }
 
-std::string with_unit(double v, const char* unit) { return num(v) + " " + unit; }
+std::string with_unit(double v, const char* unit) {
+  return num(v) + " " + unit;
+}
 
-std::string vec(const Vec3& v) { return "[" + num(v[0]) + ", " + num(v[1]) + ", " + num(v[2]) + "]"; }
+std::string vec(const Vec3& v) {
+  return "[" + num(v[0]) + ", " + num(v[1]) + ", " + num(v[2]) + "]";
+}
 
 std::string bytes(double b) {
   const char* units[] = {"B", "KiB", "MiB", "GiB", "TiB"};
@@ -838,12 +917,13 @@ std::string describe_scene(const Scene& s) {
   out << "effects\n";
   if (s.has_contacts())
     row("contacts", std::string(to_string(s.contact.model)) + " (e = " + num(s.contact.restitution) +
-                        ", t* = " + num(s.contact.t_star) + ", neighbour skin " + num(s.contact.skin_over_dp) + " d_p)");
+                        ", t* = " + num(s.contact.t_star) + ", neighbour skin " +
+                        num(s.contact.skin_over_dp) + " d_p)");
   else
     row("contacts", "none (no neighbour search)");
   if (s.has_friction())
-    row("friction and rotation", "on (mu = " + num(s.contact.friction) + ", tangential history, k_n/k_t = " +
-                                     num(s.contact.kn_over_kt) + ")");
+    row("friction and rotation", "on (mu = " + num(s.contact.friction) +
+                                     ", tangential history, k_n/k_t = " + num(s.contact.kn_over_kt) + ")");
   else
     row("friction and rotation", "off");
   if (!s.fluid) {
@@ -853,9 +933,15 @@ std::string describe_scene(const Scene& s) {
     const FluidConfig& f = *s.fluid;
     const std::string drag = std::string("drag \"") + to_string(f.drag) + "\"";
     switch (f.coupling) {
-      case Coupling::Quiescent: row("fluid", "quiescent: " + drag + " toward a fluid at rest, no grid"); break;
-      case Coupling::OneWay: row("fluid", "one-way: " + drag + ", fluid solved, no momentum returned to it"); break;
-      case Coupling::TwoWay: row("fluid", "two-way: " + drag + ", fluid solved, momentum exchanged"); break;
+      case Coupling::Quiescent:
+        row("fluid", "quiescent: " + drag + " toward a fluid at rest, no grid");
+        break;
+      case Coupling::OneWay:
+        row("fluid", "one-way: " + drag + ", fluid solved, no momentum returned to it");
+        break;
+      case Coupling::TwoWay:
+        row("fluid", "two-way: " + drag + ", fluid solved, momentum exchanged");
+        break;
     }
     if (f.coupling == Coupling::Quiescent && f.pressure_gradient_force)
       row("pressure-gradient force", "on (buoyancy of the fluid at rest)");
@@ -866,14 +952,15 @@ std::string describe_scene(const Scene& s) {
   row("gravity", g > 0 ? "on " + vec(s.domain.gravity_m_s2) + " m/s^2" : "off");
 
   out << "scene\n";
-  row("box", num(s.domain.size_m[0]) + " x " + num(s.domain.size_m[1]) + " x " + num(s.domain.size_m[2]) + " m (" +
-                 num(s.domain.size_m[0] / d) + " x " + num(s.domain.size_m[1] / d) + " x " +
+  row("box", num(s.domain.size_m[0]) + " x " + num(s.domain.size_m[1]) + " x " + num(s.domain.size_m[2]) +
+                 " m (" + num(s.domain.size_m[0] / d) + " x " + num(s.domain.size_m[1] / d) + " x " +
                  num(s.domain.size_m[2] / d) + " d_p)");
-  row("particles", "d_p = " + with_unit(d, "m") + ", rho_p = " + with_unit(s.particles.density_kg_m3, "kg/m^3") +
+  row("particles", "d_p = " + with_unit(d, "m") +
+                       ", rho_p = " + with_unit(s.particles.density_kg_m3, "kg/m^3") +
                        ", <phi_p> = " + num(s.particles.solids_fraction));
   if (s.fluid)
-    row("fluid", "rho_f = " + with_unit(s.fluid->density_kg_m3, "kg/m^3") + ", mu_f = " +
-                     with_unit(s.fluid->viscosity_Pa_s, "Pa s") +
+    row("fluid", "rho_f = " + with_unit(s.fluid->density_kg_m3, "kg/m^3") +
+                     ", mu_f = " + with_unit(s.fluid->viscosity_Pa_s, "Pa s") +
                      (s.solves_fluid() ? ", Co = " + num(s.fluid->courant) : std::string()));
   row("run", "end time " + with_unit(s.run.end_time_s, "s") + ", snapshots " +
                  (s.run.dump_interval_s > 0 ? "every " + with_unit(s.run.dump_interval_s, "s")
@@ -909,8 +996,9 @@ std::string describe_scene(const Scene& s) {
   row("dt_DEM", with_unit(x.dt_dem_s, "s") + " (" + num(s.run.end_time_s / x.dt_dem_s) + " steps)");
   if (s.solves_fluid()) {
     row("dt_fluid", with_unit(x.dt_fluid_s, "s"));
-    row("cells", std::to_string(x.cells[0]) + " x " + std::to_string(x.cells[1]) + " x " + std::to_string(x.cells[2]) +
-                     " (cell " + num(s.domain.size_m[0] / x.cells[0] / d) + " d_p along x)");
+    row("cells", std::to_string(x.cells[0]) + " x " + std::to_string(x.cells[1]) + " x " +
+                     std::to_string(x.cells[2]) + " (cell " + num(s.domain.size_m[0] / x.cells[0] / d) +
+                     " d_p along x)");
   } else {
     row("cells", "none (no grid)");
   }

@@ -34,11 +34,20 @@ std::string xml_escape(const std::string& s) {
   std::string out;
   for (char c : s) {
     switch (c) {
-      case '&': out += "&amp;"; break;
-      case '<': out += "&lt;"; break;
-      case '>': out += "&gt;"; break;
-      case '"': out += "&quot;"; break;
-      default: out += c;
+      case '&':
+        out += "&amp;";
+        break;
+      case '<':
+        out += "&lt;";
+        break;
+      case '>':
+        out += "&gt;";
+        break;
+      case '"':
+        out += "&quot;";
+        break;
+      default:
+        out += c;
     }
   }
   return out;
@@ -56,7 +65,8 @@ void particles_grid(std::ostringstream& x, const XdmfFrame& fr) {
   const std::string& h5 = fr.snapshot_file;
   const std::string in = "          ";
   x << in << "<Grid Name=\"particles\" GridType=\"Uniform\">\n"
-    << in << "  <Topology TopologyType=\"Polyvertex\" NumberOfElements=\"" << n << "\" NodesPerElement=\"1\"/>\n"
+    << in << "  <Topology TopologyType=\"Polyvertex\" NumberOfElements=\"" << n
+    << "\" NodesPerElement=\"1\"/>\n"
     << in << "  <Geometry GeometryType=\"XYZ\">\n"
     << in << "    " << hdf_item(n + " 3", h5, "/particles/position") << "\n"
     << in << "  </Geometry>\n";
@@ -75,15 +85,19 @@ void particles_grid(std::ostringstream& x, const XdmfFrame& fr) {
 void fluid_grid(std::ostringstream& x, const XdmfFrame& fr) {
   const int nx = fr.cells[0], ny = fr.cells[1], nz = fr.cells[2];
   const std::string cells = std::to_string(nz) + " " + std::to_string(ny) + " " + std::to_string(nx);
-  const std::string nodes = std::to_string(nz + 1) + " " + std::to_string(ny + 1) + " " + std::to_string(nx + 1);
+  const std::string nodes =
+      std::to_string(nz + 1) + " " + std::to_string(ny + 1) + " " + std::to_string(nx + 1);
   const std::string& h5 = fr.snapshot_file;
   const std::string in = "          ";
   x << in << "<Grid Name=\"fluid\" GridType=\"Uniform\">\n"
     << in << "  <Topology TopologyType=\"3DCoRectMesh\" Dimensions=\"" << nodes << "\"/>\n"
     << in << "  <Geometry GeometryType=\"ORIGIN_DXDYDZ\">\n"
-    << in << "    <DataItem Name=\"Origin\" Dimensions=\"3\" NumberType=\"Float\" Precision=\"8\" Format=\"XML\">"
-    << number(fr.origin_m[2]) << " " << number(fr.origin_m[1]) << " " << number(fr.origin_m[0]) << "</DataItem>\n"
-    << in << "    <DataItem Name=\"Spacing\" Dimensions=\"3\" NumberType=\"Float\" Precision=\"8\" Format=\"XML\">"
+    << in
+    << "    <DataItem Name=\"Origin\" Dimensions=\"3\" NumberType=\"Float\" Precision=\"8\" Format=\"XML\">"
+    << number(fr.origin_m[2]) << " " << number(fr.origin_m[1]) << " " << number(fr.origin_m[0])
+    << "</DataItem>\n"
+    << in
+    << "    <DataItem Name=\"Spacing\" Dimensions=\"3\" NumberType=\"Float\" Precision=\"8\" Format=\"XML\">"
     << number(fr.spacing_m[2]) << " " << number(fr.spacing_m[1]) << " " << number(fr.spacing_m[0])
     << "</DataItem>\n"
     << in << "  </Geometry>\n";

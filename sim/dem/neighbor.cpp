@@ -69,30 +69,32 @@ void NeighborList::build(const Particles& p, double cutoff, bool with_history) {
     const double* xi_ = &p.x[3 * i];
     const int c = cell_of_[i];
     const int cx = c % g.n[0], cy = (c / g.n[0]) % g.n[1], cz = c / (g.n[0] * g.n[1]);
+    const int x0 = std::max(cx - 1, 0), x1 = std::min(cx + 1, g.n[0] - 1);
     const std::size_t first = index.size();
-    for (int dz = -1; dz <= 1; ++dz) {
-      const int z = cz + dz;
-      if (z < 0 || z >= g.n[2]) continue;
-      for (int dy = -1; dy <= 1; ++dy) {
-        const int y = cy + dy;
-        if (y < 0 || y >= g.n[1]) continue;
-        for (int dx = -1; dx <= 1; ++dx) {
-          const int x = cx + dx;
-          if (x < 0 || x >= g.n[0]) continue;
-          const int cc = (z * g.n[1] + y) * g.n[0] + x;
-          for (std::int32_t k = cell_start_[cc]; k < cell_start_[cc + 1]; ++k) {
-            const std::int32_t j = cell_items_[k];
-            if (static_cast<std::size_t>(j) == i) continue;
-            const double* xj = &p.x[3 * j];
-            const double ddx = xi_[0] - xj[0], ddy = xi_[1] - xj[1], ddz = xi_[2] - xj[2];
-            if (ddx * ddx + ddy * ddy + ddz * ddz < cut2) index.push_back(j);
-          }
+    // The three cells of a row along x are contiguous in the cell order, so each of the 9 (y, z)
+    // rows is one range of cell_items_.
+    for (int z = std::max(cz - 1, 0); z <= std::min(cz + 1, g.n[2] - 1); ++z) {
+      for (int y = std::max(cy - 1, 0); y <= std::min(cy + 1, g.n[1] - 1); ++y) {
+        const int row = (z * g.n[1] + y) * g.n[0];
+        for (std::int32_t k = cell_start_[row + x0], k1 = cell_start_[row + x1 + 1]; k < k1; ++k) {
+          const std::int32_t j = cell_items_[k];
+          const double* xj = &p.x[3 * j];
+          const double ddx = xi_[0] - xj[0], ddy = xi_[1] - xj[1], ddz = xi_[2] - xj[2];
+          if (ddx * ddx + ddy * ddy + ddz * ddz < cut2 && static_cast<std::size_t>(j) != i) index.push_back(j);
         }
       }
     }
-    // canonical order: by partner id (see header)
-    std::sort(index.begin() + static_cast<std::ptrdiff_t>(first), index.end(),
-              [&](std::int32_t a, std::int32_t b) { return p.id[a] < p.id[b]; });
+    // canonical order: by partner id (see header); lists are short, insertion sort
+    for (std::size_t a = first + 1; a < index.size(); ++a) {
+      const std::int32_t j = index[a];
+      const std::int64_t key = p.id[j];
+      std::size_t b = a;
+      while (b > first && p.id[index[b - 1]] > key) {
+        index[b] = index[b - 1];
+        --b;
+      }
+      index[b] = j;
+    }
     offset[i + 1] = static_cast<std::int64_t>(index.size());
   }
   if (with_history) xi.assign(3 * index.size(), 0.0);

@@ -65,7 +65,8 @@ TEST_F(H5Test, EveryAttributeTypeRoundTrips) {
     f.set_attr("/", "step", std::int64_t{1234567890123});
     f.set_attr("/", "scene", toml);
     f.set_attr("/", "empty_text", std::string());
-    f.set_attr("/params/deep/group", "box_size_m", std::vector<double>{1e-3, 2e-3, 3e-3});  // group made on demand
+    f.set_attr("/params/deep/group", "box_size_m",
+               std::vector<double>{1e-3, 2e-3, 3e-3});  // group made on demand
     f.set_attr("/params/deep/group", "cells", std::vector<std::int64_t>{8, -16, 32});
     f.set_attr("/params", "columns", std::vector<std::string>{"time", "slip_velocity", "ε"});
     f.set_attr("/params", "nothing", std::vector<double>{});

@@ -220,7 +220,8 @@ TEST_F(OutputTest, SnapshotWithIncompleteFluidSlabIsRejectedAndNothingIsWritten)
                cgd::RunError);
   auto particles = d.particles();
   particles.position = nullptr;  // required array missing
-  EXPECT_THROW(cgd::schema::write_snapshot(file, MPI_COMM_WORLD, test_scene(), 0.0, 0, particles), cgd::RunError);
+  EXPECT_THROW(cgd::schema::write_snapshot(file, MPI_COMM_WORLD, test_scene(), 0.0, 0, particles),
+               cgd::RunError);
   EXPECT_FALSE(fs::exists(file));
   EXPECT_FALSE(fs::exists(file + ".tmp"));
 }
@@ -241,7 +242,8 @@ TEST_F(OutputTest, SeriesRoundTripKeepsColumnOrderWidthsUnitsAndValues) {
   {
     const File f = File::open_read(file, MPI_COMM_WORLD);
     EXPECT_EQ(f.attr_string("/", "cgd_format"), "series");
-    EXPECT_EQ(f.attr_strings("/", "columns"), (std::vector<std::string>{"time", "slip_velocity", "solids_fraction"}));
+    EXPECT_EQ(f.attr_strings("/", "columns"),
+              (std::vector<std::string>{"time", "slip_velocity", "solids_fraction"}));
     EXPECT_EQ(f.dims("/time"), (std::vector<std::uint64_t>{4}));
     EXPECT_EQ(f.dims("/slip_velocity"), (std::vector<std::uint64_t>{4, 3}));
     EXPECT_EQ(f.attr_string("/slip_velocity", "unit"), "m/s");
@@ -319,17 +321,19 @@ TEST_F(OutputTest, RunXmfIsWellFormedXdmf3ListingEveryFrameFile) {
   for (const char* expected :
        {"<Xdmf", "Version=\"3.0\"", "CollectionType=\"Temporal\"", "CollectionType=\"Spatial\"",
         "snapshots/snap_000000000.h5:/particles/position", "snapshots/snap_000000100.h5:/fluid/velocity",
-        "TopologyType=\"Polyvertex\" NumberOfElements=\"3\"", "GeometryType=\"XYZ\"", "Name=\"angular_velocity\"",
+        "TopologyType=\"Polyvertex\" NumberOfElements=\"3\"", "GeometryType=\"XYZ\"",
+        "Name=\"angular_velocity\"",
         "TopologyType=\"3DCoRectMesh\" Dimensions=\"4 6 5\"",  // nodes (n_z+1, n_y+1, n_x+1)
-        "GeometryType=\"ORIGIN_DXDYDZ\"", ">0.3 0.2 0.1<",  // origin, z y x
+        "GeometryType=\"ORIGIN_DXDYDZ\"", ">0.3 0.2 0.1<",     // origin, z y x
         ">0.003 0.002 0.001<", "Dimensions=\"3 5 4 3\"", "Center=\"Cell\"", "<Time Value=\"0.01\"/>"})
     EXPECT_NE(text.find(expected), std::string::npos) << expected;
 
   // Well-formed XML by a real parser, when the system Python is there (it is in the dev setup).
   if (!fs::exists("/usr/bin/python3")) GTEST_SKIP() << "no /usr/bin/python3 to parse the XML";
-  const std::string cmd = "/usr/bin/python3 -c \"import sys, xml.etree.ElementTree as ET; r = ET.parse(sys.argv[1])"
-                          ".getroot(); sys.exit(0 if len(r.findall('./Domain/Grid/Grid')) == 2 else 3)\" '" +
-                          xmf + "'";
+  const std::string cmd =
+      "/usr/bin/python3 -c \"import sys, xml.etree.ElementTree as ET; r = ET.parse(sys.argv[1])"
+      ".getroot(); sys.exit(0 if len(r.findall('./Domain/Grid/Grid')) == 2 else 3)\" '" +
+      xmf + "'";
   EXPECT_EQ(std::system(cmd.c_str()), 0) << cmd;
 }
 

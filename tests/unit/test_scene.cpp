@@ -74,8 +74,8 @@ std::string replaced(const std::string& text, const std::string& from, const std
 }
 
 struct BadInput {
-  const char* name;       // the rule the case checks
-  std::string toml;       // scene text
+  const char* name;  // the rule the case checks
+  std::string toml;  // scene text
   std::vector<std::string> overrides;
   std::vector<std::string> expected;  // substrings of the message: key, value, what is allowed
 };
@@ -83,153 +83,308 @@ struct BadInput {
 std::vector<BadInput> bad_inputs() {
   const std::string& wet = kWetScene;
   const std::string& dry = kDryScene;
-  const auto two_way = replaced(wet, "coupling = \"quiescent\"", "coupling = \"two-way\"\ncells = [8, 32, 8]");
+  const auto two_way =
+      replaced(wet, "coupling = \"quiescent\"", "coupling = \"two-way\"\ncells = [8, 32, 8]");
   return {
       // --- structure: unknown names, types, arrays
-      {"UnknownSectionSuggestsClosest", wet + "\n[partcles]\nseed = 2\n", {}, {"unknown section [partcles]", "did you mean [particles]"}},
-      {"UnknownKeySuggestsClosest", replaced(wet, "diameter = 75e-6", "diamter = 75e-6"), {},
+      {"UnknownSectionSuggestsClosest",
+       wet + "\n[partcles]\nseed = 2\n",
+       {},
+       {"unknown section [partcles]", "did you mean [particles]"}},
+      {"UnknownKeySuggestsClosest",
+       replaced(wet, "diameter = 75e-6", "diamter = 75e-6"),
+       {},
        {"particles.diamter", "did you mean particles.diameter?"}},
-      {"KeyInWrongSectionSuggestsItsSection", replaced(wet, "solids_fraction = 0.05", "solids_fraction = 0.05\nviscosity = 1e-5"), {},
+      {"KeyInWrongSectionSuggestsItsSection",
+       replaced(wet, "solids_fraction = 0.05", "solids_fraction = 0.05\nviscosity = 1e-5"),
+       {},
        {"unknown key particles.viscosity", "did you mean fluid.viscosity?"}},
       {"TopLevelKeyIsRejected", "seed = 3\n" + wet, {}, {"unknown top-level key seed", "particles.seed"}},
       {"SectionGivenAsValueIsRejected", "fluid = 3\n" + dry, {}, {"must be a section [fluid]"}},
-      {"StringWhereNumberExpected", replaced(wet, "density = 1500.0", "density = \"heavy\""), {},
+      {"StringWhereNumberExpected",
+       replaced(wet, "density = 1500.0", "density = \"heavy\""),
+       {},
        {"particles.density = \"heavy\"", "must be a number", "kg/m^3"}},
-      {"BooleanWhereNumberExpected", replaced(wet, "restitution = 0.9", "restitution = true"), {},
+      {"BooleanWhereNumberExpected",
+       replaced(wet, "restitution = 0.9", "restitution = true"),
+       {},
        {"contact.restitution = true", "must be a number"}},
-      {"NumberWhereStringExpected", replaced(wet, "coupling = \"quiescent\"", "coupling = 3"), {},
+      {"NumberWhereStringExpected",
+       replaced(wet, "coupling = \"quiescent\"", "coupling = 3"),
+       {},
        {"fluid.coupling = 3", "must be a string"}},
-      {"NumberWhereBooleanExpected", wet + "", {"fluid.pressure_gradient_force=1"},
+      {"NumberWhereBooleanExpected",
+       wet + "",
+       {"fluid.pressure_gradient_force=1"},
        {"fluid.pressure_gradient_force = 1", "must be true or false"}},
-      {"FractionalSeedIsRejected", replaced(wet, "solids_fraction = 0.05", "solids_fraction = 0.05\nseed = 1.5"), {},
+      {"FractionalSeedIsRejected",
+       replaced(wet, "solids_fraction = 0.05", "solids_fraction = 0.05\nseed = 1.5"),
+       {},
        {"particles.seed = 1.5", "must be an integer"}},
-      {"NotANumberIsRejected", replaced(wet, "diameter = 75e-6", "diameter = nan"), {},
+      {"NotANumberIsRejected",
+       replaced(wet, "diameter = 75e-6", "diameter = nan"),
+       {},
        {"particles.diameter = nan", "must be a finite number"}},
-      {"NonNumericArrayElementIsNamed", replaced(wet, "gravity = [0.0, -9.81, 0.0]", "gravity = [0.0, \"down\", 0.0]"), {},
+      {"NonNumericArrayElementIsNamed",
+       replaced(wet, "gravity = [0.0, -9.81, 0.0]", "gravity = [0.0, \"down\", 0.0]"),
+       {},
        {"domain.gravity = [0.0, \"down\", 0.0]", "array of 3 numbers", "element 2 (\"down\")"}},
-      {"ArrayOfWrongLengthIsRejected", replaced(wet, "size_dp = [24, 96, 24]", "size_dp = [24, 96]"), {},
+      {"ArrayOfWrongLengthIsRejected",
+       replaced(wet, "size_dp = [24, 96, 24]", "size_dp = [24, 96]"),
+       {},
        {"domain.size_dp = [24, 96]", "array of 3 numbers", "got 2 elements"}},
-      {"FractionalCellCountIsRejected", replaced(two_way, "cells = [8, 32, 8]", "cells = [8.5, 32, 8]"), {},
+      {"FractionalCellCountIsRejected",
+       replaced(two_way, "cells = [8, 32, 8]", "cells = [8.5, 32, 8]"),
+       {},
        {"fluid.cells = [8.5, 32, 8]", "array of 3 integers"}},
-      {"SyntaxErrorNamesTheLine", replaced(wet, "density = 1500.0", "density = = 1500.0"), {},
+      {"SyntaxErrorNamesTheLine",
+       replaced(wet, "density = 1500.0", "density = = 1500.0"),
+       {},
        {"TOML syntax error", "line 7"}},
 
       // --- required keys
-      {"MissingDomainSizeIsReported", replaced(wet, "size_dp = [24, 96, 24]\n", ""), {},
+      {"MissingDomainSizeIsReported",
+       replaced(wet, "size_dp = [24, 96, 24]\n", ""),
+       {},
        {"domain.size_dp is missing", "domain.size"}},
-      {"MissingDiameterIsReported", replaced(wet, "diameter = 75e-6\n", ""), {}, {"particles.diameter is missing", "(m, "}},
-      {"MissingDensityIsReported", replaced(wet, "density = 1500.0\n", ""), {}, {"particles.density is missing", "kg/m^3"}},
-      {"MissingSolidsFractionIsReported", replaced(wet, "solids_fraction = 0.05\n", ""), {},
+      {"MissingDiameterIsReported",
+       replaced(wet, "diameter = 75e-6\n", ""),
+       {},
+       {"particles.diameter is missing", "(m, "}},
+      {"MissingDensityIsReported",
+       replaced(wet, "density = 1500.0\n", ""),
+       {},
+       {"particles.density is missing", "kg/m^3"}},
+      {"MissingSolidsFractionIsReported",
+       replaced(wet, "solids_fraction = 0.05\n", ""),
+       {},
        {"particles.solids_fraction is missing"}},
-      {"MissingEndTimeIsReported", replaced(wet, "end_time = 0.05\n", ""), {}, {"run.end_time is missing", "end_time_tref"}},
-      {"ContactsNeedAStiffness", replaced(dry, "stiffness = 1.27\n", "restitution = 0.9\n"), {},
+      {"MissingEndTimeIsReported",
+       replaced(wet, "end_time = 0.05\n", ""),
+       {},
+       {"run.end_time is missing", "end_time_tref"}},
+      {"ContactsNeedAStiffness",
+       replaced(dry, "stiffness = 1.27\n", "restitution = 0.9\n"),
+       {},
        {"contact.stiffness is missing", "contact.gamma_star", "spring-dashpot"}},
-      {"NoContactsAndNoFluidNeedAnExplicitTimeStep", replaced(dry, "stiffness = 1.27", "model = \"none\""), {},
+      {"NoContactsAndNoFluidNeedAnExplicitTimeStep",
+       replaced(dry, "stiffness = 1.27", "model = \"none\""),
+       {},
        {"run.dt is missing", "contact.model = \"none\""}},
-      {"SolvedFluidNeedsCells", replaced(wet, "coupling = \"quiescent\"", "coupling = \"two-way\""), {},
+      {"SolvedFluidNeedsCells",
+       replaced(wet, "coupling = \"quiescent\"", "coupling = \"two-way\""),
+       {},
        {"fluid.cells is missing", "\"two-way\"", "dx_over_dp"}},
-      {"OneWayFluidNeedsCells", replaced(wet, "coupling = \"quiescent\"", "coupling = \"one-way\""), {},
+      {"OneWayFluidNeedsCells",
+       replaced(wet, "coupling = \"quiescent\"", "coupling = \"one-way\""),
+       {},
        {"fluid.cells is missing", "\"one-way\""}},
 
       // --- ranges
-      {"RejectsNegativeDiameter", replaced(wet, "diameter = 75e-6", "diameter = -1e-5"), {},
+      {"RejectsNegativeDiameter",
+       replaced(wet, "diameter = 75e-6", "diameter = -1e-5"),
+       {},
        {"particles.diameter = -1e-05: must be > 0 (m"}},
-      {"RejectsZeroDiameter", replaced(wet, "diameter = 75e-6", "diameter = 0"), {}, {"particles.diameter = 0", "must be > 0"}},
-      {"RejectsNonPositiveParticleDensity", replaced(wet, "density = 1500.0", "density = -1500.0"), {},
+      {"RejectsZeroDiameter",
+       replaced(wet, "diameter = 75e-6", "diameter = 0"),
+       {},
+       {"particles.diameter = 0", "must be > 0"}},
+      {"RejectsNonPositiveParticleDensity",
+       replaced(wet, "density = 1500.0", "density = -1500.0"),
+       {},
        {"particles.density = -1500.0", "must be > 0", "kg/m^3"}},
-      {"RejectsZeroSolidsFraction", replaced(wet, "solids_fraction = 0.05", "solids_fraction = 0.0"), {},
+      {"RejectsZeroSolidsFraction",
+       replaced(wet, "solids_fraction = 0.05", "solids_fraction = 0.0"),
+       {},
        {"particles.solids_fraction = 0.0", "must be in (0, 0.64)"}},
-      {"RejectsSolidsFractionAbovePacking", replaced(wet, "solids_fraction = 0.05", "solids_fraction = 0.7"), {},
+      {"RejectsSolidsFractionAbovePacking",
+       replaced(wet, "solids_fraction = 0.05", "solids_fraction = 0.7"),
+       {},
        {"particles.solids_fraction = 0.7", "must be in (0, 0.64)", "random close packing"}},
-      {"RejectsParcelSizeBelowOne", replaced(wet, "solids_fraction = 0.05", "solids_fraction = 0.05\nparcel_size = 0.5"), {},
+      {"RejectsParcelSizeBelowOne",
+       replaced(wet, "solids_fraction = 0.05", "solids_fraction = 0.05\nparcel_size = 0.5"),
+       {},
        {"particles.parcel_size = 0.5", "must be >= 1"}},
-      {"RejectsNegativeVelocityRms", replaced(wet, "solids_fraction = 0.05", "solids_fraction = 0.05\nvelocity_rms = -0.1"), {},
+      {"RejectsNegativeVelocityRms",
+       replaced(wet, "solids_fraction = 0.05", "solids_fraction = 0.05\nvelocity_rms = -0.1"),
+       {},
        {"particles.velocity_rms = -0.1", "must be >= 0", "m/s"}},
       {"RejectsNegativeSeed", wet, {"particles.seed=-4"}, {"particles.seed = -4", "integer >= 0"}},
-      {"RejectsBoxEdgeBelowFourDiameters", replaced(wet, "size_dp = [24, 96, 24]", "size_dp = [3, 96, 24]"), {},
+      {"RejectsBoxEdgeBelowFourDiameters",
+       replaced(wet, "size_dp = [24, 96, 24]", "size_dp = [3, 96, 24]"),
+       {},
        {"domain.size_dp = [3, 96, 24]", ">= 4 parcel diameters", "edge x"}},
-      {"RejectsBoxEdgeBelowFourParcelDiameters", replaced(wet, "solids_fraction = 0.05", "solids_fraction = 0.05\nparcel_size = 8"),
-       {}, {"domain.size_dp = [24, 96, 24]", "4 alpha d_p = 32 primary diameters"}},
-      {"RejectsBoxInMetresBelowFourDiameters", replaced(wet, "size_dp = [24, 96, 24]", "size = [1e-3, 1e-4, 1e-3]"), {},
+      {"RejectsBoxEdgeBelowFourParcelDiameters",
+       replaced(wet, "solids_fraction = 0.05", "solids_fraction = 0.05\nparcel_size = 8"),
+       {},
+       {"domain.size_dp = [24, 96, 24]", "4 alpha d_p = 32 primary diameters"}},
+      {"RejectsBoxInMetresBelowFourDiameters",
+       replaced(wet, "size_dp = [24, 96, 24]", "size = [1e-3, 1e-4, 1e-3]"),
+       {},
        {"domain.size = [0.001, 0.0001, 0.001]", "4 alpha d_p = 0.0003 m", "edge y"}},
-      {"RejectsTStarAboveBound", replaced(wet, "restitution = 0.9", "restitution = 0.9\nt_star = 0.5"), {},
+      {"RejectsTStarAboveBound",
+       replaced(wet, "restitution = 0.9", "restitution = 0.9\nt_star = 0.5"),
+       {},
        {"contact.t_star = 0.5", "must be in (0, 0.2]"}},
-      {"RejectsZeroTStar", replaced(wet, "restitution = 0.9", "restitution = 0.9\nt_star = 0"), {},
+      {"RejectsZeroTStar",
+       replaced(wet, "restitution = 0.9", "restitution = 0.9\nt_star = 0"),
+       {},
        {"contact.t_star = 0", "(0, 0.2]"}},
-      {"RejectsZeroRestitution", replaced(wet, "restitution = 0.9", "restitution = 0.0"), {},
+      {"RejectsZeroRestitution",
+       replaced(wet, "restitution = 0.9", "restitution = 0.0"),
+       {},
        {"contact.restitution = 0.0", "must be in (0, 1]"}},
-      {"RejectsRestitutionAboveOne", replaced(wet, "restitution = 0.9", "restitution = 1.1"), {},
+      {"RejectsRestitutionAboveOne",
+       replaced(wet, "restitution = 0.9", "restitution = 1.1"),
+       {},
        {"contact.restitution = 1.1", "(0, 1]"}},
-      {"RejectsNegativeFriction", replaced(wet, "friction = 0.1", "friction = -0.1"), {},
+      {"RejectsNegativeFriction",
+       replaced(wet, "friction = 0.1", "friction = -0.1"),
+       {},
        {"contact.friction = -0.1", "must be >= 0"}},
-      {"RejectsZeroStiffnessRatio", replaced(wet, "friction = 0.1", "friction = 0.1\nkn_over_kt = 0"), {},
+      {"RejectsZeroStiffnessRatio",
+       replaced(wet, "friction = 0.1", "friction = 0.1\nkn_over_kt = 0"),
+       {},
        {"contact.kn_over_kt = 0", "must be > 0"}},
-      {"RejectsZeroDampingRatio", replaced(wet, "friction = 0.1", "friction = 0.1\ngamman_over_gammat = 0.0"), {},
+      {"RejectsZeroDampingRatio",
+       replaced(wet, "friction = 0.1", "friction = 0.1\ngamman_over_gammat = 0.0"),
+       {},
        {"contact.gamman_over_gammat = 0.0", "must be > 0"}},
-      {"RejectsNegativeSkin", replaced(wet, "friction = 0.1", "friction = 0.1\nskin_over_dp = -0.1"), {},
+      {"RejectsNegativeSkin",
+       replaced(wet, "friction = 0.1", "friction = 0.1\nskin_over_dp = -0.1"),
+       {},
        {"contact.skin_over_dp = -0.1", "must be >= 0"}},
-      {"RejectsNegativeGammaStar", replaced(wet, "gamma_star = 1e-3", "gamma_star = -1e-3"), {},
+      {"RejectsNegativeGammaStar",
+       replaced(wet, "gamma_star = 1e-3", "gamma_star = -1e-3"),
+       {},
        {"contact.gamma_star = -0.001", "must be > 0"}},
-      {"RejectsZeroStiffness", replaced(dry, "stiffness = 1.27", "stiffness = 0"), {}, {"contact.stiffness = 0", "must be > 0", "N/m"}},
-      {"RejectsCourantAboveOne", replaced(two_way, "drag = \"stokes\"", "drag = \"stokes\"\ncourant = 1.5"), {},
+      {"RejectsZeroStiffness",
+       replaced(dry, "stiffness = 1.27", "stiffness = 0"),
+       {},
+       {"contact.stiffness = 0", "must be > 0", "N/m"}},
+      {"RejectsCourantAboveOne",
+       replaced(two_way, "drag = \"stokes\"", "drag = \"stokes\"\ncourant = 1.5"),
+       {},
        {"fluid.courant = 1.5", "must be in (0, 1]"}},
-      {"RejectsZeroViscosity", replaced(wet, "viscosity = 1.8e-5", "viscosity = 0.0"), {},
+      {"RejectsZeroViscosity",
+       replaced(wet, "viscosity = 1.8e-5", "viscosity = 0.0"),
+       {},
        {"fluid.viscosity = 0.0", "must be > 0 (Pa s"}},
-      {"RejectsFluidDenserThanParticles", replaced(wet, "density = 1.3", "density = 2000.0"), {},
+      {"RejectsFluidDenserThanParticles",
+       replaced(wet, "density = 1.3", "density = 2000.0"),
+       {},
        {"fluid.density = 2000.0", "must be < particles.density = 1500"}},
-      {"RejectsZeroCells", replaced(two_way, "cells = [8, 32, 8]", "cells = [0, 32, 8]"), {},
+      {"RejectsZeroCells",
+       replaced(two_way, "cells = [8, 32, 8]", "cells = [0, 32, 8]"),
+       {},
        {"fluid.cells = [0, 32, 8]", "[1, 1000000]"}},
-      {"RejectsCellLargerThanBox", replaced(two_way, "cells = [8, 32, 8]", "dx_over_dp = 100.0"), {},
+      {"RejectsCellLargerThanBox",
+       replaced(two_way, "cells = [8, 32, 8]", "dx_over_dp = 100.0"),
+       {},
        {"fluid.dx_over_dp = 100.0", "gives 0 cells along x"}},
-      {"RejectsZeroEndTime", replaced(wet, "end_time = 0.05", "end_time = 0"), {}, {"run.end_time = 0", "must be > 0"}},
-      {"RejectsNegativeDumpInterval", replaced(wet, "dump_interval = 0.005", "dump_interval = -1.0"), {},
+      {"RejectsZeroEndTime",
+       replaced(wet, "end_time = 0.05", "end_time = 0"),
+       {},
+       {"run.end_time = 0", "must be > 0"}},
+      {"RejectsNegativeDumpInterval",
+       replaced(wet, "dump_interval = 0.005", "dump_interval = -1.0"),
+       {},
        {"run.dump_interval = -1.0", "must be >= 0"}},
-      {"RejectsZeroCheckpointInterval", replaced(wet, "end_time = 0.05", "end_time = 0.05\ncheckpoint_wall_s = 0"), {},
+      {"RejectsZeroCheckpointInterval",
+       replaced(wet, "end_time = 0.05", "end_time = 0.05\ncheckpoint_wall_s = 0"),
+       {},
        {"run.checkpoint_wall_s = 0", "must be > 0"}},
 
       // --- enums
-      {"RejectsUnknownContactModel", wet, {"contact.model=hertz"},
+      {"RejectsUnknownContactModel",
+       wet,
+       {"contact.model=hertz"},
        {"contact.model = \"hertz\"", "\"spring-dashpot\", \"none\""}},
-      {"RejectsUnknownCouplingWithSuggestion", replaced(wet, "coupling = \"quiescent\"", "coupling = \"twoway\""), {},
-       {"fluid.coupling = \"twoway\"", "\"two-way\", \"one-way\", \"quiescent\"", "did you mean \"two-way\"?"}},
-      {"RejectsUnknownDragLaw", replaced(wet, "drag = \"stokes\"", "drag = \"ergun\""), {},
+      {"RejectsUnknownCouplingWithSuggestion",
+       replaced(wet, "coupling = \"quiescent\"", "coupling = \"twoway\""),
+       {},
+       {"fluid.coupling = \"twoway\"", "\"two-way\", \"one-way\", \"quiescent\"",
+        "did you mean \"two-way\"?"}},
+      {"RejectsUnknownDragLaw",
+       replaced(wet, "drag = \"stokes\"", "drag = \"ergun\""),
+       {},
        {"fluid.drag = \"ergun\"", "\"beetstra\", \"wen-yu\", \"stokes\", \"radl2014\", \"model\""}},
 
       // --- alternatives and keys that need something else
-      {"RejectsGammaStarTogetherWithStiffness", replaced(wet, "gamma_star = 1e-3", "gamma_star = 1e-3\nstiffness = 1.27"), {},
+      {"RejectsGammaStarTogetherWithStiffness",
+       replaced(wet, "gamma_star = 1e-3", "gamma_star = 1e-3\nstiffness = 1.27"),
+       {},
        {"contact.gamma_star or contact.stiffness", "not both"}},
-      {"RejectsGammaStarWithoutFluid", replaced(dry, "stiffness = 1.27", "gamma_star = 1e-3"), {},
+      {"RejectsGammaStarWithoutFluid",
+       replaced(dry, "stiffness = 1.27", "gamma_star = 1e-3"),
+       {},
        {"contact.gamma_star = 0.001", "needs a [fluid] section", "give contact.stiffness"}},
-      {"RejectsGammaStarWithoutGravity", replaced(wet, "gravity = [0.0, -9.81, 0.0]", "gravity = [0.0, 0.0, 0.0]"), {},
+      {"RejectsGammaStarWithoutGravity",
+       replaced(wet, "gravity = [0.0, -9.81, 0.0]", "gravity = [0.0, 0.0, 0.0]"),
+       {},
        {"contact.gamma_star = 0.001", "needs gravity", "contact.stiffness"}},
-      {"RejectsEndTimeInTrefWithoutFluid", replaced(dry, "end_time = 1e-3", "end_time_tref = 2.0"), {},
+      {"RejectsEndTimeInTrefWithoutFluid",
+       replaced(dry, "end_time = 1e-3", "end_time_tref = 2.0"),
+       {},
        {"run.end_time_tref = 2.0", "needs a [fluid] section", "run.end_time"}},
-      {"RejectsDumpIntervalInTrefWithoutFluid", dry + "dump_interval_tref = 0.5\n", {},
+      {"RejectsDumpIntervalInTrefWithoutFluid",
+       dry + "dump_interval_tref = 0.5\n",
+       {},
        {"run.dump_interval_tref = 0.5", "needs a [fluid] section"}},
-      {"RejectsEndTimeGivenTwice", replaced(wet, "end_time = 0.05", "end_time = 0.05\nend_time_tref = 2.0"), {},
+      {"RejectsEndTimeGivenTwice",
+       replaced(wet, "end_time = 0.05", "end_time = 0.05\nend_time_tref = 2.0"),
+       {},
        {"run.end_time_tref = 2.0", "run.end_time (s) or run.end_time_tref, not both"}},
-      {"RejectsBoxSizeGivenTwice", replaced(wet, "size_dp = [24, 96, 24]", "size_dp = [24, 96, 24]\nsize = [1e-3, 1e-3, 1e-3]"), {},
+      {"RejectsBoxSizeGivenTwice",
+       replaced(wet, "size_dp = [24, 96, 24]", "size_dp = [24, 96, 24]\nsize = [1e-3, 1e-3, 1e-3]"),
+       {},
        {"domain.size", "domain.size (m) or domain.size_dp", "not both"}},
-      {"RejectsCellsTogetherWithCellSize", replaced(two_way, "cells = [8, 32, 8]", "cells = [8, 32, 8]\ndx_over_dp = 3.0"), {},
+      {"RejectsCellsTogetherWithCellSize",
+       replaced(two_way, "cells = [8, 32, 8]", "cells = [8, 32, 8]\ndx_over_dp = 3.0"),
+       {},
        {"fluid.cells or fluid.dx_over_dp", "not both"}},
-      {"RejectsExplicitTimeStepWithContacts", replaced(wet, "end_time = 0.05", "end_time = 0.05\ndt = 1e-6"), {},
+      {"RejectsExplicitTimeStepWithContacts",
+       replaced(wet, "end_time = 0.05", "end_time = 0.05\ndt = 1e-6"),
+       {},
        {"run.dt = 1e-06", "contact.t_star"}},
 
       // --- --set overrides
-      {"OverrideWithoutEqualsIsRejected", wet, {"particles.solids_fraction"}, {"--set particles.solids_fraction", "SECTION.KEY=VALUE"}},
+      {"OverrideWithoutEqualsIsRejected",
+       wet,
+       {"particles.solids_fraction"},
+       {"--set particles.solids_fraction", "SECTION.KEY=VALUE"}},
       {"OverrideWithoutSectionIsRejected", wet, {"diameter=1e-4"}, {"--set diameter=1e-4", "SECTION.KEY"}},
-      {"OverrideOfUnknownSectionIsRejected", wet, {"flud.drag=stokes"}, {"unknown section [flud]", "did you mean [fluid]"}},
-      {"OverrideOfUnknownKeyIsRejected", wet, {"fluid.drg=stokes"}, {"unknown key fluid.drg", "did you mean fluid.drag?"}},
+      {"OverrideOfUnknownSectionIsRejected",
+       wet,
+       {"flud.drag=stokes"},
+       {"unknown section [flud]", "did you mean [fluid]"}},
+      {"OverrideOfUnknownKeyIsRejected",
+       wet,
+       {"fluid.drg=stokes"},
+       {"unknown key fluid.drg", "did you mean fluid.drag?"}},
       {"OverrideWithoutValueIsRejected", wet, {"run.end_time="}, {"--set run.end_time=", "no value"}},
-      {"OverrideWithBrokenArrayIsRejected", wet, {"domain.size_dp=[10, 20"}, {"--set domain.size_dp=[10, 20", "not valid TOML"}},
-      {"OverrideOutOfRangeSaysItCameFromSet", wet, {"particles.solids_fraction=0.9"},
+      {"OverrideWithBrokenArrayIsRejected",
+       wet,
+       {"domain.size_dp=[10, 20"},
+       {"--set domain.size_dp=[10, 20", "not valid TOML"}},
+      {"OverrideOutOfRangeSaysItCameFromSet",
+       wet,
+       {"particles.solids_fraction=0.9"},
        {"particles.solids_fraction = 0.9 (from --set)", "(0, 0.64)"}},
-      {"OverrideBareStringIsCheckedAgainstChoices", wet, {"fluid.drag=wenyu"}, {"fluid.drag = \"wenyu\"", "did you mean \"wen-yu\"?"}},
-      {"OverrideWithTextWhereNumberExpected", wet, {"particles.diameter=big"}, {"particles.diameter = \"big\"", "must be a number"}},
+      {"OverrideBareStringIsCheckedAgainstChoices",
+       wet,
+       {"fluid.drag=wenyu"},
+       {"fluid.drag = \"wenyu\"", "did you mean \"wen-yu\"?"}},
+      {"OverrideWithTextWhereNumberExpected",
+       wet,
+       {"particles.diameter=big"},
+       {"particles.diameter = \"big\"", "must be a number"}},
   };
 }
 
-void PrintTo(const BadInput& c, std::ostream* out) { *out << c.name; }
+void PrintTo(const BadInput& c, std::ostream* out) {
+  *out << c.name;
+}
 
 class SceneValidation : public ::testing::TestWithParam<BadInput> {};
 
@@ -241,22 +396,29 @@ TEST_P(SceneValidation, MessageNamesKeyValueAndAllowedRange) {
   } catch (const InputError& e) {
     const std::string message = e.what();
     EXPECT_EQ(message.rfind("scene.toml", 0), 0u) << "the message must start with the file name: " << message;
-    for (const auto& expected : c.expected) EXPECT_NE(message.find(expected), std::string::npos)
-        << "expected \"" << expected << "\" in: " << message;
+    for (const auto& expected : c.expected)
+      EXPECT_NE(message.find(expected), std::string::npos)
+          << "expected \"" << expected << "\" in: " << message;
   }
 }
 
 INSTANTIATE_TEST_SUITE_P(BadInputs, SceneValidation, ::testing::ValuesIn(bad_inputs()),
-                         [](const ::testing::TestParamInfo<BadInput>& info) { return std::string(info.param.name); });
+                         [](const ::testing::TestParamInfo<BadInput>& info) {
+                           return std::string(info.param.name);
+                         });
 
-TEST(SceneValidationTable, CoversAtLeastThirtyCases) { EXPECT_GE(bad_inputs().size(), 30u); }
+TEST(SceneValidationTable, CoversAtLeastThirtyCases) {
+  EXPECT_GE(bad_inputs().size(), 30u);
+}
 
 TEST(SceneFiles, MissingFileIsAnInputErrorNamingThePath) {
   try {
     cgd::load_scene("/nonexistent/dir/scene.toml");
     FAIL();
   } catch (const InputError& e) {
-    EXPECT_NE(std::string(e.what()).find("/nonexistent/dir/scene.toml: cannot read the scene file"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("/nonexistent/dir/scene.toml: cannot read the scene file"),
+              std::string::npos)
+        << e.what();
   }
 }
 
@@ -266,7 +428,9 @@ TEST(SceneFiles, DirectoryIsAnInputError) {
 
 // ---- derived numbers ----------------------------------------------------------------------------
 
-double relative(double a, double b) { return std::abs(a - b) / std::abs(b); }
+double relative(double a, double b) {
+  return std::abs(a - b) / std::abs(b);
+}
 
 TEST(SceneDerived, PaperParametersGiveTheReferenceScalesOfModelsMd) {
   const auto s = load_scene_from_string(kWetScene, "paper.toml");
@@ -277,7 +441,8 @@ TEST(SceneDerived, PaperParametersGiveTheReferenceScalesOfModelsMd) {
   EXPECT_NEAR(x.re_p, 1.18, 0.005);
   EXPECT_NEAR(x.fr_p, 65.0, 0.5);
   EXPECT_NEAR(x.l_ref_m, 4.86e-3, 0.005e-3);
-  EXPECT_NEAR(x.l_char_m / d, 4.02, 0.005);  // (models.md's "3.02e-4 m" is 4.02 d_p rounded up; 4.018 d_p = 3.013e-4 m)
+  EXPECT_NEAR(x.l_char_m / d, 4.02,
+              0.005);  // (models.md's "3.02e-4 m" is 4.02 d_p rounded up; 4.018 d_p = 3.013e-4 m)
   EXPECT_NEAR(x.t_ref_s, 0.0223, 0.00005);
   // Contact numbers of models.md (1.27 N/m, 3.59e-5 s, 7.18e-7 s) are rounded from u_t ~= 0.219 m/s
   // (the peer benchmark's value); with u_t = 0.21851 m/s the same gamma* gives k_n = 1.2760 N/m.
@@ -302,7 +467,9 @@ TEST(SceneDerived, DerivedNumbersFollowTheFormulasOfModelsMd) {
   EXPECT_DOUBLE_EQ(x.parcel_mass_kg, rho_p * v_p);
   // u_t solves the Schiller-Naumann balance (iteration converged to round-off)
   const double re = rho_f * d * x.u_t_m_s / mu;
-  EXPECT_LT(relative(x.u_t_m_s, (rho_p - rho_f) * g * d * d / (18.0 * mu * (1.0 + 0.15 * std::pow(re, 0.687)))), 1e-12);
+  EXPECT_LT(
+      relative(x.u_t_m_s, (rho_p - rho_f) * g * d * d / (18.0 * mu * (1.0 + 0.15 * std::pow(re, 0.687)))),
+      1e-12);
   EXPECT_DOUBLE_EQ(x.re_p, re);
   EXPECT_DOUBLE_EQ(x.fr_p, x.u_t_m_s * x.u_t_m_s / (g * d));
   EXPECT_LT(relative(x.l_char_m, d * std::cbrt(x.fr_p)), 1e-13);  // L_ref Fr^(-2/3) = d Fr^(1/3)
@@ -325,7 +492,8 @@ TEST(SceneDerived, DerivedNumbersFollowTheFormulasOfModelsMd) {
 
 TEST(SceneDerived, PeerBenchmarkStiffnessReproducesParamsInc) {
   // shared/peers/params.inc, printed to 11 significant digits: compare to 1e-9.
-  const auto s = load_scene_from_string(replaced(kWetScene, "gamma_star = 1e-3", "stiffness = 1.27"), "peer.toml");
+  const auto s =
+      load_scene_from_string(replaced(kWetScene, "gamma_star = 1e-3", "stiffness = 1.27"), "peer.toml");
   EXPECT_LT(relative(s.derived.t_c_s, 3.5901612019e-05), 1e-9);
   EXPECT_LT(relative(s.derived.dt_dem_s, 7.1803224038e-07), 1e-9);
   EXPECT_LT(relative(s.derived.gamma_n_kg_s, 9.7238356470e-07), 1e-9);
@@ -346,8 +514,9 @@ TEST(SceneDerived, ParcelsScaleStiffnessAndContactTimeWithParcelSize) {
 }
 
 TEST(SceneDerived, SolvedFluidDerivesCellsAndCourantTimeStep) {
-  const auto s = load_scene_from_string(
-      replaced(kWetScene, "coupling = \"quiescent\"", "coupling = \"two-way\"\ncells = [8, 32, 8]\ncourant = 0.3"), "w.toml");
+  const auto s = load_scene_from_string(replaced(kWetScene, "coupling = \"quiescent\"",
+                                                 "coupling = \"two-way\"\ncells = [8, 32, 8]\ncourant = 0.3"),
+                                        "w.toml");
   const auto& x = s.derived;
   EXPECT_EQ(x.cells, (std::array<int, 3>{8, 32, 8}));
   const double cell = 3.0 * 75e-6;  // 24 d_p / 8 cells
@@ -362,31 +531,34 @@ TEST(SceneDerived, SolvedFluidDerivesCellsAndCourantTimeStep) {
 }
 
 TEST(SceneDerived, QuiescentFluidIgnoresCellsForTheGrid) {
-  const auto s = load_scene_from_string(replaced(kWetScene, "drag = \"stokes\"", "drag = \"stokes\"\ncells = [8, 32, 8]"), "q.toml");
+  const auto s = load_scene_from_string(
+      replaced(kWetScene, "drag = \"stokes\"", "drag = \"stokes\"\ncells = [8, 32, 8]"), "q.toml");
   EXPECT_FALSE(s.solves_fluid());
   EXPECT_EQ(s.derived.cells, (std::array<int, 3>{0, 0, 0}));
   EXPECT_EQ(s.derived.dt_fluid_s, 0.0);
 }
 
 TEST(SceneDerived, TimesInUnitsOfTrefAreConvertedToSeconds) {
-  const auto s = load_scene_from_string(replaced(replaced(kWetScene, "end_time = 0.05", "end_time_tref = 20.0"),
-                                                 "dump_interval = 0.005", "dump_interval_tref = 0.5\nseries_interval_tref = 0.1"),
-                                        "t.toml");
+  const auto s = load_scene_from_string(
+      replaced(replaced(kWetScene, "end_time = 0.05", "end_time_tref = 20.0"), "dump_interval = 0.005",
+               "dump_interval_tref = 0.5\nseries_interval_tref = 0.1"),
+      "t.toml");
   EXPECT_DOUBLE_EQ(s.run.end_time_s, 20.0 * s.derived.t_ref_s);
   EXPECT_DOUBLE_EQ(s.run.dump_interval_s, 0.5 * s.derived.t_ref_s);
   EXPECT_DOUBLE_EQ(s.run.series_interval_s, 0.1 * s.derived.t_ref_s);
 }
 
 TEST(SceneDerived, WithoutContactsTheStepResolvesDragRelaxationOrIsGiven) {
-  const auto wet = load_scene_from_string(replaced(kWetScene, "gamma_star = 1e-3", "model = \"none\""), "n.toml");
+  const auto wet =
+      load_scene_from_string(replaced(kWetScene, "gamma_star = 1e-3", "model = \"none\""), "n.toml");
   EXPECT_FALSE(wet.has_contacts());
   EXPECT_DOUBLE_EQ(wet.derived.dt_dem_s, 0.02 * wet.derived.stokes_relaxation_s);
   EXPECT_EQ(wet.derived.k_n_N_m, 0.0);
-  const auto dry = load_scene_from_string(replaced(kDryScene, "stiffness = 1.27", "model = \"none\""), "n.toml",
-                                          {"run.dt=1e-6"});
+  const auto dry = load_scene_from_string(replaced(kDryScene, "stiffness = 1.27", "model = \"none\""),
+                                          "n.toml", {"run.dt=1e-6"});
   EXPECT_DOUBLE_EQ(dry.derived.dt_dem_s, 1e-6);
-  const auto wet_dt = load_scene_from_string(replaced(kWetScene, "gamma_star = 1e-3", "model = \"none\""), "n.toml",
-                                             {"run.dt=2e-6"});
+  const auto wet_dt = load_scene_from_string(replaced(kWetScene, "gamma_star = 1e-3", "model = \"none\""),
+                                             "n.toml", {"run.dt=2e-6"});
   EXPECT_DOUBLE_EQ(wet_dt.derived.dt_dem_s, 2e-6);
 }
 
@@ -400,7 +572,8 @@ TEST(SceneDerived, DryGasHasNoFluidScalesAndFrictionSwitchesRotation) {
 }
 
 TEST(SceneDerived, BoxInMetresIsTakenAsIs) {
-  const auto s = load_scene_from_string(replaced(kWetScene, "size_dp = [24, 96, 24]", "size = [1.8e-3, 7.2e-3, 1.8e-3]"), "m.toml");
+  const auto s = load_scene_from_string(
+      replaced(kWetScene, "size_dp = [24, 96, 24]", "size = [1.8e-3, 7.2e-3, 1.8e-3]"), "m.toml");
   EXPECT_DOUBLE_EQ(s.domain.size_m[1], 7.2e-3);
   EXPECT_EQ(s.derived.particle_count, 5280);
 }
@@ -408,10 +581,11 @@ TEST(SceneDerived, BoxInMetresIsTakenAsIs) {
 // ---- overrides and the effective scene ------------------------------------------------------------
 
 TEST(SceneOverrides, ValuesAreReadAsTomlOrAsBareStrings) {
-  const auto s = load_scene_from_string(kWetScene, "dry_settling.toml",
-                                        {"particles.solids_fraction=0.2", "fluid.drag=wen-yu", "domain.size_dp=[10,20,10]",
-                                         "fluid.pressure_gradient_force=false", "particles.seed=7",
-                                         "contact.restitution = 0.8", "fluid.coupling=\"quiescent\""});
+  const auto s = load_scene_from_string(
+      kWetScene, "dry_settling.toml",
+      {"particles.solids_fraction=0.2", "fluid.drag=wen-yu", "domain.size_dp=[10,20,10]",
+       "fluid.pressure_gradient_force=false", "particles.seed=7", "contact.restitution = 0.8",
+       "fluid.coupling=\"quiescent\""});
   EXPECT_DOUBLE_EQ(s.particles.solids_fraction, 0.2);
   EXPECT_EQ(s.fluid->drag, cgd::DragLaw::WenYu);
   EXPECT_DOUBLE_EQ(s.domain.size_m[1], 20 * 75e-6);
@@ -434,7 +608,8 @@ TEST(SceneOverrides, LaterOverrideWinsAndCanAddASection) {
 }
 
 TEST(SceneOverrides, EffectiveTomlHoldsTheOverridesAndReloadsToTheSameScene) {
-  const auto s = load_scene_from_string(kWetScene, "w.toml", {"particles.solids_fraction=0.2", "fluid.drag=wen-yu"});
+  const auto s =
+      load_scene_from_string(kWetScene, "w.toml", {"particles.solids_fraction=0.2", "fluid.drag=wen-yu"});
   EXPECT_NE(s.effective_toml.find("solids_fraction = 0.2\n"), std::string::npos) << s.effective_toml;
   EXPECT_NE(s.effective_toml.find("drag = \"wen-yu\""), std::string::npos) << s.effective_toml;
   EXPECT_NE(s.effective_toml.find("diameter = 7.5e-05\n"), std::string::npos) << "shortest round-trip floats";
@@ -462,9 +637,26 @@ TEST(SceneNames, EnumNamesAreTheSceneNames) {
 
 TEST(SceneDescription, ListsEffectsAndDerivedNumbersWithUnits) {
   const auto text = cgd::describe_scene(load_scene_from_string(kWetScene, "dry_settling.toml"));
-  for (const char* expected : {"spring-dashpot", "quiescent", "\"stokes\"", "no grid", "friction and rotation", "gravity",
-                               "u_t", "m/s", "Re_p", "Fr_p", "L_char", "t_ref", "k_n", "N/m", "t_c", "dt_DEM", "cells",
-                               "particle count", "5280", "memory estimate"})
+  for (const char* expected : {"spring-dashpot",
+                               "quiescent",
+                               "\"stokes\"",
+                               "no grid",
+                               "friction and rotation",
+                               "gravity",
+                               "u_t",
+                               "m/s",
+                               "Re_p",
+                               "Fr_p",
+                               "L_char",
+                               "t_ref",
+                               "k_n",
+                               "N/m",
+                               "t_c",
+                               "dt_DEM",
+                               "cells",
+                               "particle count",
+                               "5280",
+                               "memory estimate"})
     EXPECT_NE(text.find(expected), std::string::npos) << "missing \"" << expected << "\" in:\n" << text;
   const auto dry = cgd::describe_scene(load_scene_from_string(kDryScene, "gas.toml", {"contact.friction=0"}));
   EXPECT_NE(dry.find("none (dry granular run"), std::string::npos) << dry;
@@ -477,7 +669,8 @@ TEST(SceneDescription, ListsEffectsAndDerivedNumbersWithUnits) {
 std::filesystem::path scene_dir() {
   const char* source = std::getenv("CGD_SOURCE_DIR");
   const std::filesystem::path root =
-      source ? std::filesystem::path(source) : std::filesystem::path(__FILE__).parent_path().parent_path().parent_path();
+      source ? std::filesystem::path(source)
+             : std::filesystem::path(__FILE__).parent_path().parent_path().parent_path();
   return root / "data" / "scenes";
 }
 
@@ -493,7 +686,8 @@ TEST(SceneFiles, EveryShippedSceneLoads) {
     EXPECT_EQ(scene.name, entry.path().stem().string());
     loaded.push_back(scene.name);
   }
-  for (const char* name : {"dry_settling", "granular_gas", "bench_s10", "bench_s30", "bench_l10", "bench_l30"})
+  for (const char* name :
+       {"dry_settling", "granular_gas", "bench_s10", "bench_s30", "bench_l10", "bench_l30"})
     EXPECT_NE(std::find(loaded.begin(), loaded.end(), name), loaded.end()) << name << ".toml missing";
 }
 
@@ -508,7 +702,8 @@ TEST(SceneFiles, PeerBenchmarkScenesMatchThePeerCounts) {
     EXPECT_LT(relative(s.derived.dt_dem_s, 7.1803224038e-07), 1e-9) << name;
     EXPECT_NEAR(s.run.end_time_s / s.derived.dt_dem_s, 2200.0, 1e-6) << name;
     // Stokes drag 3 pi mu d equals LAMMPS's fix viscous gamma
-    EXPECT_LT(relative(3.0 * std::numbers::pi * s.fluid->viscosity_Pa_s * 75e-6, 1.4842209727e-08), 1e-9) << name;
+    EXPECT_LT(relative(3.0 * std::numbers::pi * s.fluid->viscosity_Pa_s * 75e-6, 1.4842209727e-08), 1e-9)
+        << name;
   }
 }
 
@@ -531,8 +726,8 @@ cgd::RunOptions parse(std::vector<std::string> args) {
 }
 
 TEST(CommandLine, ParsesSceneRepeatedSetOutputAndFlags) {
-  const auto o = parse({"cgd-generate", "scene.toml", "--set", "particles.solids_fraction=0.2", "--set=fluid.drag=wen-yu",
-                        "-o", "out/x", "--restart", "--quiet"});
+  const auto o = parse({"cgd-generate", "scene.toml", "--set", "particles.solids_fraction=0.2",
+                        "--set=fluid.drag=wen-yu", "-o", "out/x", "--restart", "--quiet"});
   EXPECT_EQ(o.scene_path, "scene.toml");
   EXPECT_EQ(o.overrides, (std::vector<std::string>{"particles.solids_fraction=0.2", "fluid.drag=wen-yu"}));
   EXPECT_EQ(o.output_dir, "out/x");
@@ -559,10 +754,10 @@ TEST(CommandLine, HelpAndVersionExitWithZeroBadOptionsWithTwo) {
   };
   EXPECT_EQ(status_of({"cgd-generate", "--help"}), 0);
   EXPECT_EQ(status_of({"cgd-generate", "--version"}), 0);
-  EXPECT_EQ(status_of({"cgd-generate"}), 2);                          // no scene
-  EXPECT_EQ(status_of({"cgd-generate", "a.toml", "--bogus"}), 2);     // unknown option
-  EXPECT_EQ(status_of({"cgd-generate", "a.toml", "b.toml"}), 2);      // two scenes
-  EXPECT_EQ(status_of({"cgd-generate", "a.toml", "--set"}), 2);       // --set without a value
+  EXPECT_EQ(status_of({"cgd-generate"}), 2);                       // no scene
+  EXPECT_EQ(status_of({"cgd-generate", "a.toml", "--bogus"}), 2);  // unknown option
+  EXPECT_EQ(status_of({"cgd-generate", "a.toml", "b.toml"}), 2);   // two scenes
+  EXPECT_EQ(status_of({"cgd-generate", "a.toml", "--set"}), 2);    // --set without a value
 }
 
 TEST(CommandLine, VersionPrintsToolNameAndVersion) {
@@ -570,16 +765,19 @@ TEST(CommandLine, VersionPrintsToolNameAndVersion) {
     parse({"cgd-generate", "--version"});
     FAIL();
   } catch (const cgd::CommandLineExit& e) {
-    EXPECT_NE(e.out_text().find(std::string("cgd-generate ") + CGD_VERSION), std::string::npos) << e.out_text();
+    EXPECT_NE(e.out_text().find(std::string("cgd-generate ") + CGD_VERSION), std::string::npos)
+        << e.out_text();
   }
 }
 
 TEST(CommandLine, RunToolMapsErrorsToExitStatuses) {
   ::testing::internal::CaptureStderr();
   EXPECT_EQ(cgd::run_tool([] { return 0; }), cgd::kExitOk);
-  EXPECT_EQ(cgd::run_tool([]() -> int { throw cgd::InputError("scene.toml: particles.diameter = -1: must be > 0"); }),
+  EXPECT_EQ(cgd::run_tool(
+                []() -> int { throw cgd::InputError("scene.toml: particles.diameter = -1: must be > 0"); }),
             cgd::kExitBadInput);
-  EXPECT_EQ(cgd::run_tool([]() -> int { throw cgd::RunError("NaN in particle velocity at step 12"); }), cgd::kExitRunFailed);
+  EXPECT_EQ(cgd::run_tool([]() -> int { throw cgd::RunError("NaN in particle velocity at step 12"); }),
+            cgd::kExitRunFailed);
   const std::string err = ::testing::internal::GetCapturedStderr();
   EXPECT_NE(err.find("error: scene.toml: particles.diameter = -1: must be > 0\n"), std::string::npos) << err;
   EXPECT_NE(err.find("run failed: NaN in particle velocity at step 12\n"), std::string::npos) << err;
@@ -599,7 +797,8 @@ TEST(CommandLine, RunToolReportsABadSceneFromInsideTheBody) {
 }
 
 TEST(CommandLine, DefaultRunDirectoryIsStageAndSceneStem) {
-  EXPECT_EQ(cgd::default_run_directory("generate", "data/scenes/dry_settling.toml"), "out/generate/dry_settling");
+  EXPECT_EQ(cgd::default_run_directory("generate", "data/scenes/dry_settling.toml"),
+            "out/generate/dry_settling");
 }
 
 }  // namespace

@@ -1,0 +1,198 @@
+#pragma once
+// Microscopic drag laws (models.md, "Microscopic drag laws") as evaluators: each is a small struct
+// built from its parameters with two inline, non-virtual methods,
+//   reynolds(phi, slip_speed)  particle Reynolds number of the law (dimensionless),
+//   beta_p(phi, slip_speed)    per-particle drag coefficient, kg m^-3 s^-1,
+// in the per-particle convention of models.md (the paper's eq. 3):
+//   F_d,i = V_p beta_p,i (u_i - v_i),   eps = 1 - phi,   two-fluid beta = phi beta_p.
+// phi is the solids volume fraction at the particle (0 <= phi < 1); slip_speed = |u - v| in m/s
+// (its sign is ignored). The same evaluator serves the generator, the filter's normalisation and
+// the coarse runner; hot loops choose the law once with visit_drag_law and call the evaluator
+// inline. For parcels, beta_p is evaluated with the primary diameter (models.md, "Parcels").
+#include <cmath>
+#include <functional>
+
+#include "core/scene.hpp"
+
+namespace cgd {
+
+/// Parameters shared by every microscopic law.
+struct DragParams {
+  double rho_f = 0;  // fluid density, kg/m^3
+  double mu_f = 0;   // fluid dynamic viscosity, Pa s
+  double d = 0;      // particle (primary) diameter, m
+};
+
+/// Stokes drag on a single sphere (Stokes 1851):
+///   F_d = 3 pi mu_f d (u - v)   =>   beta_p = 18 mu_f / d^2,
+/// independent of phi and Re (no hindrance by neighbours, no inertia). reynolds() is the
+/// single-particle Re = rho_f d |u - v| / mu_f, for information only.
+struct StokesDrag {
+  using Params = DragParams;
+  Params params;
+
+  explicit StokesDrag(const Params& p) : params(p), stokes_beta_(18.0 * p.mu_f / (p.d * p.d)) {}
+  StokesDrag(double rho_f, double mu_f, double d) : StokesDrag(Params{rho_f, mu_f, d}) {}
+
+  double reynolds(double /*phi*/, double slip_speed) const {
+    return params.rho_f * params.d * std::abs(slip_speed) / params.mu_f;
+  }
+  double beta_p(double /*phi*/, double /*slip_speed*/) const { return stokes_beta_; }
+
+ private:
+  double stokes_beta_;  // 18 mu_f / d^2, kg m^-3 s^-1
+};
+
+/// Schiller & Naumann (1933, Z. Ver. Dtsch. Ing. 77:318) for a single sphere in unbounded fluid:
+///   Re = rho_f d |u - v| / mu_f,   C_d = 24/Re (1 + 0.15 Re^0.687),
+///   beta_p = (3/4) C_d rho_f |u - v| / d = 18 mu_f / d^2 (1 + 0.15 Re^0.687),
+/// independent of phi; fitted for Re <~ 800 (no Newton-regime cap). This is the law of the
+/// reference terminal velocity u_t (models.md, core/scales.hpp).
+struct SchillerNaumannDrag {
+  using Params = DragParams;
+  Params params;
+
+  explicit SchillerNaumannDrag(const Params& p) : params(p), stokes_beta_(18.0 * p.mu_f / (p.d * p.d)) {}
+  SchillerNaumannDrag(double rho_f, double mu_f, double d) : SchillerNaumannDrag(Params{rho_f, mu_f, d}) {}
+
+  double reynolds(double /*phi*/, double slip_speed) const {
+    return params.rho_f * params.d * std::abs(slip_speed) / params.mu_f;
+  }
+  double beta_p(double phi, double slip_speed) const {
+    return stokes_beta_ * (1.0 + 0.15 * std::pow(reynolds(phi, slip_speed), 0.687));
+  }
+
+ private:
+  double stokes_beta_;  // 18 mu_f / d^2, kg m^-3 s^-1
+};
+
+/// Wen & Yu (1966, Chem. Eng. Prog. Symp. Ser. 62:100), as written in models.md:
+///   Re = eps rho_f d |u - v| / mu_f,
+///   C_d = 24/Re (1 + 0.15 Re^0.687) for Re <= 1000, else 0.44,
+///   beta_p = (3/4) C_d rho_f eps |u - v| eps^-2.65 / d.
+/// For Re <= 1000 the eps |u - v| of beta_p cancels against the one in Re:
+///   beta_p = 18 mu_f eps^-2.65 / d^2 (1 + 0.15 Re^0.687),
+/// which is how it is evaluated, so |u - v| -> 0 is exact and finite: beta_p -> 18 mu_f eps^-2.65 / d^2.
+/// At phi = 0 it is Schiller-Naumann (for Re <= 1000). C_d jumps at Re = 1000 by the factor
+/// 0.44 / C_d(1000) = 1.0039 (the published law is not continuous there).
+struct WenYuDrag {
+  using Params = DragParams;
+  Params params;
+
+  explicit WenYuDrag(const Params& p)
+      : params(p), stokes_beta_(18.0 * p.mu_f / (p.d * p.d)), re_per_slip_(p.rho_f * p.d / p.mu_f) {}
+  WenYuDrag(double rho_f, double mu_f, double d) : WenYuDrag(Params{rho_f, mu_f, d}) {}
+
+  double reynolds(double phi, double slip_speed) const {
+    return (1.0 - phi) * re_per_slip_ * std::abs(slip_speed);
+  }
+  double beta_p(double phi, double slip_speed) const {
+    const double eps = 1.0 - phi;
+    const double re = reynolds(phi, slip_speed);
+    const double hindrance = std::pow(eps, -2.65);
+    if (re <= 1000.0) return stokes_beta_ * hindrance * (1.0 + 0.15 * std::pow(re, 0.687));
+    return 0.75 * 0.44 * params.rho_f * eps * std::abs(slip_speed) * hindrance / params.d;  // Newton regime
+  }
+
+ private:
+  double stokes_beta_;  // 18 mu_f / d^2, kg m^-3 s^-1
+  double re_per_slip_;  // rho_f d / mu_f, s/m
+};
+
+/// Beetstra, van der Hoef & Kuipers (2007, AIChE J. 53:489), monodisperse, as written in models.md:
+///   Re = eps rho_f d |u - v| / mu_f,
+///   F(phi, Re) = 10 phi/eps^2 + eps^2 (1 + 1.5 sqrt(phi))
+///              + [0.413 Re / (24 eps^2)] (1/eps + 3 eps phi + 8.4 Re^-0.343) / (1 + 10^(3 phi) Re^(-(1+4 phi)/2)),
+///   F_d = 3 pi mu_f d eps F (u - v)  (model A: excludes -V_p grad p)   =>   beta_p = 18 mu_f eps F / d^2.
+/// The last term is 0 * inf at Re = 0; it is evaluated multiplied through by Re^a, a = (1 + 4 phi)/2:
+///   [0.413 / (24 eps^2)] (Re (1/eps + 3 eps phi) + 8.4 Re^0.657) Re^a / (Re^a + 10^(3 phi)),
+/// which is finite and tends to 0 like Re^(1.157 + 2 phi); valid for Re < ~1e100 (Re^a must not overflow).
+/// Limits: F(0, 0) = 1 (Stokes); F(phi, 0) = 10 phi/eps^2 + eps^2 (1 + 1.5 sqrt(phi)).
+struct BeetstraDrag {
+  using Params = DragParams;
+  Params params;
+
+  explicit BeetstraDrag(const Params& p)
+      : params(p), stokes_beta_(18.0 * p.mu_f / (p.d * p.d)), re_per_slip_(p.rho_f * p.d / p.mu_f) {}
+  BeetstraDrag(double rho_f, double mu_f, double d) : BeetstraDrag(Params{rho_f, mu_f, d}) {}
+
+  /// The dimensionless drag force F(phi, Re) = F_d / (3 pi mu_f d eps |u - v|).
+  static double normalized_force(double phi, double re) {
+    const double eps = 1.0 - phi;
+    const double eps2 = eps * eps;
+    const double viscous = 10.0 * phi / eps2 + eps2 * (1.0 + 1.5 * std::sqrt(phi));
+    const double re_a = std::pow(re, 0.5 + 2.0 * phi);
+    const double inertial = 0.413 / (24.0 * eps2) * (re * (1.0 / eps + 3.0 * eps * phi) + 8.4 * std::pow(re, 0.657)) *
+                            re_a / (re_a + std::pow(10.0, 3.0 * phi));
+    return viscous + inertial;
+  }
+
+  double reynolds(double phi, double slip_speed) const {
+    return (1.0 - phi) * re_per_slip_ * std::abs(slip_speed);
+  }
+  double beta_p(double phi, double slip_speed) const {
+    return stokes_beta_ * (1.0 - phi) * normalized_force(phi, reynolds(phi, slip_speed));
+  }
+
+ private:
+  double stokes_beta_;  // 18 mu_f / d^2, kg m^-3 s^-1
+  double re_per_slip_;  // rho_f d / mu_f, s/m
+};
+
+/// Throws InputError: `law` (Radl2014, Model) is a filtered model, which needs a model file and
+/// cannot be built from DragParams alone.
+[[noreturn]] void throw_drag_law_needs_model(DragLaw law);
+
+/// Chooses the microscopic evaluator for `law` once and calls visit(evaluator); use it outside hot
+/// loops, e.g. visit_drag_law(law, p, [&](const auto& drag) { loop calling drag.beta_p(...); }).
+/// Throws InputError for DragLaw::Radl2014 and DragLaw::Model.
+template <class Visitor>
+decltype(auto) visit_drag_law(DragLaw law, const DragParams& params, Visitor&& visit) {
+  switch (law) {
+    case DragLaw::Stokes: return visit(StokesDrag(params));
+    case DragLaw::WenYu: return visit(WenYuDrag(params));
+    case DragLaw::Beetstra: return visit(BeetstraDrag(params));
+    case DragLaw::Radl2014:
+    case DragLaw::Model: break;
+  }
+  throw_drag_law_needs_model(law);
+}
+
+/// beta_p of `law` (kg m^-3 s^-1) chosen at run time, for code that is not hot. Throws InputError
+/// for DragLaw::Radl2014 and DragLaw::Model ("needs a filtered model file").
+double beta_p(DragLaw law, const DragParams& params, double phi, double slip_speed);
+
+namespace detail {
+/// Root w >= 0 of beta_p_of_slip(w) w = eps (rho_p - rho_f) g (bracketed, GSL Brent, 1e-14 relative).
+/// Requires beta_p(w) w increasing in w and beta_p(w) >= beta_p(0). Throws InputError for phi outside
+/// [0, 1), rho_p <= rho_f, g <= 0 or non-positive DragParams.
+double settling_slip_speed(const std::function<double(double)>& beta_p_of_slip, const DragParams& params,
+                           double phi, double rho_p, double g);
+}  // namespace detail
+
+/// Homogeneous (unclustered) settling slip speed, m/s: the solution w of the balance of models.md
+///   V_p eps (rho_p - rho_f) g = F_d = V_p beta_p(phi, w) w,
+/// g = |gravity| in m/s^2. beta_p(phi, w) w increases with w for every law here, so the root is
+/// unique; it is bracketed by [0, eps (rho_p - rho_f) g / beta_p(phi, 0)] and found with GSL's Brent
+/// solver to 1e-14 relative.
+template <class Law>
+double homogeneous_slip_speed(const Law& law, double phi, double rho_p, double g) {
+  return detail::settling_slip_speed([&](double w) { return law.beta_p(phi, w); }, law.params, phi, rho_p, g);
+}
+double homogeneous_slip_speed(DragLaw law, const DragParams& params, double phi, double rho_p, double g);
+
+/// homogeneous_slip_speed(law, params, phi, rho_p, g) / u_t (u_t in m/s; models.md's convention is the
+/// Schiller-Naumann u_t of core/scales.hpp).
+double homogeneous_slip_over_ut(DragLaw law, const DragParams& params, double phi, double rho_p, double g,
+                                double u_t);
+
+/// Terminal velocity of a single particle (phi = 0), m/s: (rho_p - rho_f) g = beta_p(0, u) u.
+/// terminal_velocity(SchillerNaumannDrag(p), ...) and terminal_velocity(DragLaw::WenYu, p, ...) are
+/// models.md's u_t (core/scales.hpp); Beetstra gives 0.232 m/s for the paper's case.
+template <class Law>
+double terminal_velocity(const Law& law, double rho_p, double g) {
+  return homogeneous_slip_speed(law, 0.0, rho_p, g);
+}
+double terminal_velocity(DragLaw law, const DragParams& params, double rho_p, double g);
+
+}  // namespace cgd
