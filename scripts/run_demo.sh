@@ -22,6 +22,8 @@ if ! bash scripts/setup.sh; then
 fi
 
 export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1
+# the demo always starts afresh (a run directory is never overwritten by cgd-generate itself)
+rm -rf "$run_dir"
 say "running: ${main_job[*]} $*"
 "${main_job[@]}" "$@"
 status=$?
