@@ -11,6 +11,17 @@ namespace cgd::dem {
 SlabDecomposition::SlabDecomposition(MPI_Comm comm, std::array<double, 3> box_m) : comm_(comm), box_(box_m) {
   MPI_Comm_rank(comm_, &rank_);
   MPI_Comm_size(comm_, &size_);
+  for (int r = 0; r < size_; ++r) lower_.push_back(box_[1] * r / size_);
+}
+
+SlabDecomposition::SlabDecomposition(MPI_Comm comm, std::array<double, 3> box_m, const std::vector<double>& lower_bounds)
+    : comm_(comm), box_(box_m), lower_(lower_bounds) {
+  MPI_Comm_rank(comm_, &rank_);
+  MPI_Comm_size(comm_, &size_);
+  if (static_cast<int>(lower_.size()) != size_ || lower_.front() != 0.0)
+    throw RunError("slab bounds: need one lower bound per rank, the first at y = 0");
+  for (int r = 1; r < size_; ++r)
+    if (!(lower_[r] > lower_[r - 1]) || !(lower_[r] < box_[1])) throw RunError("slab bounds must increase within the box");
 }
 
 int SlabDecomposition::owner(double y) const {

@@ -17,7 +17,11 @@ namespace cgd::dem {
 
 class SlabDecomposition {
  public:
+  /// Equal slabs of the box height.
   SlabDecomposition(MPI_Comm comm, std::array<double, 3> box_m);
+  /// Slabs with given lower bounds (one per rank, increasing, starting at 0), e.g. the fluid grid's
+  /// FFTW-MPI rows times the cell height, so particles and cells share their slabs.
+  SlabDecomposition(MPI_Comm comm, std::array<double, 3> box_m, const std::vector<double>& lower_bounds);
 
   MPI_Comm comm() const { return comm_; }
   int rank() const { return rank_; }
@@ -26,7 +30,7 @@ class SlabDecomposition {
   int up() const { return (rank_ + 1) % size_; }
   const std::array<double, 3>& box() const { return box_; }
   /// Lower y bound of rank r's slab (r = size gives the box height). Same arithmetic everywhere.
-  double slab_lo(int r) const { return r == size_ ? box_[1] : box_[1] * r / size_; }
+  double slab_lo(int r) const { return r == size_ ? box_[1] : lower_[r]; }
   double y_lo() const { return slab_lo(rank_); }
   double y_hi() const { return slab_lo(rank_ + 1); }
   /// The rank owning height y (y already wrapped into [0, L_y)).
@@ -38,6 +42,7 @@ class SlabDecomposition {
   MPI_Comm comm_;
   int rank_ = 0, size_ = 1;
   std::array<double, 3> box_;
+  std::vector<double> lower_;  // lower y bound of every rank's slab
 };
 
 class GhostExchange {

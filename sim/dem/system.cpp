@@ -9,7 +9,10 @@
 namespace cgd::dem {
 
 DemSystem::DemSystem(const DemSettings& settings, MPI_Comm comm)
-    : s_(settings), slabs_(comm, settings.box_m), ghosts_(slabs_) {
+    : s_(settings),
+      slabs_(settings.slab_lower_bounds.empty() ? SlabDecomposition(comm, settings.box_m)
+                                                : SlabDecomposition(comm, settings.box_m, settings.slab_lower_bounds)),
+      ghosts_(slabs_) {
   p_.rotation = s_.contacts && s_.friction;
   const double radius = 0.5 * s_.diameter_m;
   kc_.dt = s_.dt_s;

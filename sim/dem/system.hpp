@@ -32,6 +32,7 @@ struct DemSettings {
   UniformDrive drive;          // gravity/buoyancy and quiescent drag
   double overlap_limit = 0.25; // relative overlap (of the diameter) taken as a blow-up
   std::int64_t sort_interval_steps = 1000;
+  std::vector<double> slab_lower_bounds;  // empty: equal slabs; else one per rank (fluid grid rows)
 };
 
 /// Global diagnostics of step n (reduced over ranks), from the synchronous velocities.
