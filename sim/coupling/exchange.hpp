@@ -1,0 +1,54 @@
+#pragma once
+// Particle <-> grid exchange on the fluid's slab layout (sim/fluid/grid.hpp): fields stored with y
+// slowest, index (j_local + ghost) * n_z n_x + k n_x + i, `ghost` planes below and above the owned
+// rows, x and z periodic by index. Deposition adds TSC-weighted particle quantities into the owned
+// and ghost planes; `accumulate_ghosts` then adds every ghost plane into the rank that owns it (the
+// transpose of the fluid's ghost exchange), so the total deposited equals the sum over particles to
+// round-off, on any number of ranks.
+#include <mpi.h>
+
+#include <array>
+#include <cstddef>
+#include <initializer_list>
+#include <vector>
+
+#include "sim/coupling/kernel.hpp"
+
+namespace cgd::coupling {
+
+struct GridView {
+  std::array<int, 3> cells{};      // global (n_x, n_y, n_z)
+  std::array<double, 3> spacing{};  // m
+  int j0 = 0, ny_local = 0, ghost = 2;
+  std::size_t plane() const { return static_cast<std::size_t>(cells[0]) * cells[2]; }
+  std::size_t storage_size() const { return plane() * static_cast<std::size_t>(ny_local + 2 * ghost); }
+  std::size_t index(int i, int j_local, int k) const {
+    return static_cast<std::size_t>(j_local + ghost) * plane() + static_cast<std::size_t>(k) * cells[0] + i;
+  }
+  double cell_volume() const { return spacing[0] * spacing[1] * spacing[2]; }
+};
+
+/// The 27 cells and weights of a particle at x (m; x and z may lie outside the box, y within a
+/// cell of this slab). Calls f(storage index, weight) for each; the weights sum to 1.
+template <class F>
+inline void for_each_tsc_cell(const GridView& g, const double* x, F&& f) {
+  const AxisWeights ax = tsc_weights(x[0], 0.0, g.spacing[0]);
+  const AxisWeights ay = tsc_weights(x[1], g.j0 * g.spacing[1], g.spacing[1]);
+  const AxisWeights az = tsc_weights(x[2], 0.0, g.spacing[2]);
+  int ix[3], iz[3];
+  for (int a = 0; a < 3; ++a) {
+    ix[a] = ((ax.first + a) % g.cells[0] + g.cells[0]) % g.cells[0];
+    iz[a] = ((az.first + a) % g.cells[2] + g.cells[2]) % g.cells[2];
+  }
+  for (int c = 0; c < 3; ++c)
+    for (int b = 0; b < 3; ++b) {
+      const double wyz = ay.w[b] * az.w[c];
+      const std::size_t row = g.index(0, ay.first + b, iz[c]);
+      for (int a = 0; a < 3; ++a) f(row + static_cast<std::size_t>(ix[a]), ax.w[a] * wyz);
+    }
+}
+
+/// Add every ghost plane into the owning rank's rows (periodic in y) and zero the ghosts. Collective.
+void accumulate_ghosts(MPI_Comm comm, const GridView& g, std::initializer_list<double*> fields);
+
+}  // namespace cgd::coupling
