@@ -102,7 +102,8 @@ struct WenYuDrag {
 /// Beetstra, van der Hoef & Kuipers (2007, AIChE J. 53:489), monodisperse, as written in models.md:
 ///   Re = eps rho_f d |u - v| / mu_f,
 ///   F(phi, Re) = 10 phi/eps^2 + eps^2 (1 + 1.5 sqrt(phi))
-///              + [0.413 Re / (24 eps^2)] (1/eps + 3 eps phi + 8.4 Re^-0.343) / (1 + 10^(3 phi) Re^(-(1+4 phi)/2)),
+///              + [0.413 Re / (24 eps^2)] (1/eps + 3 eps phi + 8.4 Re^-0.343)
+///                / (1 + 10^(3 phi) Re^(-(1 + 4 phi)/2)),
 ///   F_d = 3 pi mu_f d eps F (u - v)  (model A: excludes -V_p grad p)   =>   beta_p = 18 mu_f eps F / d^2.
 /// The last term is 0 * inf at Re = 0; it is evaluated multiplied through by Re^a, a = (1 + 4 phi)/2:
 ///   [0.413 / (24 eps^2)] (Re (1/eps + 3 eps phi) + 8.4 Re^0.657) Re^a / (Re^a + 10^(3 phi)),
@@ -122,8 +123,9 @@ struct BeetstraDrag {
     const double eps2 = eps * eps;
     const double viscous = 10.0 * phi / eps2 + eps2 * (1.0 + 1.5 * std::sqrt(phi));
     const double re_a = std::pow(re, 0.5 + 2.0 * phi);
-    const double inertial = 0.413 / (24.0 * eps2) * (re * (1.0 / eps + 3.0 * eps * phi) + 8.4 * std::pow(re, 0.657)) *
-                            re_a / (re_a + std::pow(10.0, 3.0 * phi));
+    const double inertial = 0.413 / (24.0 * eps2) *
+                            (re * (1.0 / eps + 3.0 * eps * phi) + 8.4 * std::pow(re, 0.657)) * re_a /
+                            (re_a + std::pow(10.0, 3.0 * phi));
     return viscous + inertial;
   }
 
@@ -149,11 +151,15 @@ struct BeetstraDrag {
 template <class Visitor>
 decltype(auto) visit_drag_law(DragLaw law, const DragParams& params, Visitor&& visit) {
   switch (law) {
-    case DragLaw::Stokes: return visit(StokesDrag(params));
-    case DragLaw::WenYu: return visit(WenYuDrag(params));
-    case DragLaw::Beetstra: return visit(BeetstraDrag(params));
+    case DragLaw::Stokes:
+      return visit(StokesDrag(params));
+    case DragLaw::WenYu:
+      return visit(WenYuDrag(params));
+    case DragLaw::Beetstra:
+      return visit(BeetstraDrag(params));
     case DragLaw::Radl2014:
-    case DragLaw::Model: break;
+    case DragLaw::Model:
+      break;
   }
   throw_drag_law_needs_model(law);
 }

@@ -5,6 +5,7 @@
 // from the formulas typed afresh from models.md (the Beetstra bracket in its original form, with
 // Re^-0.343 and Re^-(1+4phi)/2, i.e. not the rewritten form the code uses). Script (python3, mpmath 1.2):
 //
+// clang-format off
 //   from mpmath import mp, mpf, sqrt, findroot   # formulas typed from models.md; 40 digits, no rewriting
 //   mp.dps = 40
 //   rho_f, mu, d, rho_p, g = mpf('1.3'), mpf('1.8e-5'), mpf('75e-6'), mpf(1500), mpf('9.81')
@@ -33,6 +34,7 @@
 //   for phi in ['0.02', '0.05', '0.10', '0.20', '0.30', '0.40']:
 //       print('{%s, %s, %s},' % (phi, s(settle(beetstra, mpf(phi))/ut), s(settle(wenyu, mpf(phi))/ut)))
 //   print('Wen-Yu jump 0.44/C_d(1000) =', s(mpf('0.44')/(24/mpf(1000)*(1 + mpf('0.15')*mpf(1000)**mpf('0.687')))))
+// clang-format on
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -60,7 +62,9 @@ const DragParams kParams{kRhoF, kMuF, kD};
 constexpr double kStokesBeta = 18.0 * kMuF / (kD * kD);  // 57600 kg m^-3 s^-1
 
 // Slip speed that gives the law's Re = eps rho_f d w / mu_f at solids fraction phi.
-double slip_for_re(double phi, double re) { return re * kMuF / ((1.0 - phi) * kRhoF * kD); }
+double slip_for_re(double phi, double re) {
+  return re * kMuF / ((1.0 - phi) * kRhoF * kD);
+}
 
 // beta_p pins: only round-off separates the code from the 40-digit references (a handful of pow/sqrt
 // calls, each good to ~1 ulp, and the slip <-> Re conversion), so 1e-12 relative is generous while
@@ -70,6 +74,7 @@ constexpr double kRoundOff = 1e-12;
 struct Pin {
   double phi, re, beetstra, wen_yu;  // beta_p in kg m^-3 s^-1
 };
+// clang-format off
 constexpr Pin kPins[] = {
     {0.01, 0.01, 70123.617436878432, 59529.737254392622},
     {0.01, 1, 74653.256858215626, 68027.89897567975},
@@ -88,13 +93,15 @@ constexpr Pin kPins[] = {
     {0.5, 10, 655890.29539240395, 625317.18263590936},
     {0.5, 100, 1451906.7201987402, 1644585.3182448121},
 };
+// clang-format on
 
 TEST(DragPins, BeetstraMatchesIndependentEvaluation) {
   const BeetstraDrag drag(kParams);
   for (const Pin& p : kPins) {
     const double w = slip_for_re(p.phi, p.re);
     EXPECT_NEAR(drag.reynolds(p.phi, w), p.re, kRoundOff * p.re) << "phi " << p.phi;
-    EXPECT_NEAR(drag.beta_p(p.phi, w), p.beetstra, kRoundOff * p.beetstra) << "phi " << p.phi << " Re " << p.re;
+    EXPECT_NEAR(drag.beta_p(p.phi, w), p.beetstra, kRoundOff * p.beetstra)
+        << "phi " << p.phi << " Re " << p.re;
     // Drag depends on |u - v| only.
     EXPECT_EQ(drag.beta_p(p.phi, -w), drag.beta_p(p.phi, w));
   }
@@ -114,7 +121,8 @@ TEST(DragPins, SchillerNaumannAndStokesAreSingleParticleLaws) {
   // Single-particle Re = rho_f d w / mu_f; both laws ignore phi.
   struct {
     double re, beta;
-  } const pins[] = {{0.01, 57965.185682725481}, {1, 66240.0}, {10, 99625.582571742281}, {100, 262015.46186276951}};
+  } const pins[] = {
+      {0.01, 57965.185682725481}, {1, 66240.0}, {10, 99625.582571742281}, {100, 262015.46186276951}};
   const SchillerNaumannDrag schiller(kParams);
   const StokesDrag stokes(kRhoF, kMuF, kD);
   for (const auto& p : pins) {
@@ -193,9 +201,11 @@ TEST(DragLimits, WenYuWithoutNeighboursIsSchillerNaumann) {
   for (double re : {0.0, 0.01, 1.0, 10.0, 100.0, 999.0}) {
     const double w = slip_for_re(0.0, re);
     // phi = 0: eps = 1, the same expression: equal to round-off (1e-15, here 1e-14 for margin).
-    EXPECT_NEAR(wen_yu.beta_p(0.0, w), schiller.beta_p(0.0, w), 1e-14 * schiller.beta_p(0.0, w)) << "Re " << re;
+    EXPECT_NEAR(wen_yu.beta_p(0.0, w), schiller.beta_p(0.0, w), 1e-14 * schiller.beta_p(0.0, w))
+        << "Re " << re;
     // phi = 1e-9: eps^-2.65 = 1 + 2.65e-9 and Re shifts by 1e-9: relative change ~ 3e-9 < 1e-8.
-    EXPECT_NEAR(wen_yu.beta_p(1e-9, w), schiller.beta_p(0.0, w), 1e-8 * schiller.beta_p(0.0, w)) << "Re " << re;
+    EXPECT_NEAR(wen_yu.beta_p(1e-9, w), schiller.beta_p(0.0, w), 1e-8 * schiller.beta_p(0.0, w))
+        << "Re " << re;
   }
 }
 
@@ -213,7 +223,7 @@ TEST(DragWenYu, BothBranchesOfTheReynolds1000Switch) {
   const WenYuDrag drag(kParams);
   struct {
     double phi, re, beta;
-  } const pins[] = {{0.1, 999.5, 1390231.950767617},  // C_d = 24/Re (1 + 0.15 Re^0.687)
+  } const pins[] = {{0.1, 999.5, 1390231.950767617},    // C_d = 24/Re (1 + 0.15 Re^0.687)
                     {0.1, 1000.5, 1396813.2985990792},  // C_d = 0.44
                     {0.3, 5000, 13587016.92823896}};
   for (const auto& p : pins)
@@ -223,9 +233,13 @@ TEST(DragWenYu, BothBranchesOfTheReynolds1000Switch) {
   // the ratio 0.44 / C_d(1000) = 1.0039057866816223 (mpmath): the law is discontinuous there, slightly.
   const double phi = 0.1;
   double w = slip_for_re(phi, 1000.0);
-  while (drag.reynolds(phi, w) > 1000.0) w = std::nextafter(w, 0.0);  // land on Re <= 1000 exactly
+  // Step by single ulps (bounded: the product eps rho_f d w / mu_f is off 1000 by a few ulp at most).
+  for (int i = 0; i < 64 && drag.reynolds(phi, w) > 1000.0; ++i) w = std::nextafter(w, 0.0);
   double w_above = w;
-  while (drag.reynolds(phi, w_above) <= 1000.0) w_above = std::nextafter(w_above, 1.0);  // first Re > 1000
+  for (int i = 0; i < 64 && drag.reynolds(phi, w_above) <= 1000.0; ++i)
+    w_above = std::nextafter(w_above, 2.0 * w);
+  ASSERT_LE(drag.reynolds(phi, w), 1000.0);
+  ASSERT_GT(drag.reynolds(phi, w_above), 1000.0);
   const double below = drag.beta_p(phi, w);
   const double above = drag.beta_p(phi, w_above);
   // The two slips differ by a few ulp, so the ratio is the C_d jump to ~1e-15.
@@ -239,7 +253,8 @@ constexpr double kUtSchillerNaumann = 0.21846084216441061;  // mpmath, see the s
 TEST(DragSettling, TerminalVelocityOfWenYuAndSchillerNaumannIsTheReferenceScale) {
   const double u_t_scales = cgd::schiller_naumann_terminal_velocity(kD, kRhoP, kRhoF, kMuF, kG);
   // Both solve (rho_p - rho_f) g = beta_p u to ~1e-14 relative (fixed point vs Brent): 1e-12 is round-off.
-  EXPECT_NEAR(cgd::terminal_velocity(SchillerNaumannDrag(kParams), kRhoP, kG), u_t_scales, 1e-12 * u_t_scales);
+  EXPECT_NEAR(cgd::terminal_velocity(SchillerNaumannDrag(kParams), kRhoP, kG), u_t_scales,
+              1e-12 * u_t_scales);
   EXPECT_NEAR(cgd::terminal_velocity(DragLaw::WenYu, kParams, kRhoP, kG), u_t_scales, 1e-12 * u_t_scales);
   EXPECT_NEAR(u_t_scales, kUtSchillerNaumann, 1e-12 * kUtSchillerNaumann);
   EXPECT_NEAR(u_t_scales, 0.2185, 5e-5);  // models.md's printed value
@@ -248,7 +263,8 @@ TEST(DragSettling, TerminalVelocityOfWenYuAndSchillerNaumannIsTheReferenceScale)
 TEST(DragSettling, TerminalVelocityOfBeetstraAndStokes) {
   // Beetstra 0.23200063568124877 (models.md quotes 0.232 for CFDEMcoupling), Stokes
   // (rho_p - rho_f) g d^2 / (18 mu_f) = 0.25524734375 exactly. Solver tolerance 1e-14: 1e-12 relative.
-  EXPECT_NEAR(cgd::terminal_velocity(DragLaw::Beetstra, kParams, kRhoP, kG), 0.23200063568124877, 1e-12 * 0.232);
+  EXPECT_NEAR(cgd::terminal_velocity(DragLaw::Beetstra, kParams, kRhoP, kG), 0.23200063568124877,
+              1e-12 * 0.232);
   EXPECT_NEAR(cgd::terminal_velocity(DragLaw::Stokes, kParams, kRhoP, kG), 0.25524734375, 1e-12 * 0.255);
   // Stokes hindered settling has the closed form w = eps (rho_p - rho_f) g d^2 / (18 mu_f).
   EXPECT_NEAR(cgd::homogeneous_slip_speed(StokesDrag(kParams), 0.3, kRhoP, kG), 0.7 * 0.25524734375,
@@ -260,6 +276,7 @@ struct SettlingRow {
   double beetstra_table, wen_yu_table;  // models.md, printed to 3 digits
   double beetstra, wen_yu;              // mpmath, normalised by kUtSchillerNaumann
 };
+// clang-format off
 constexpr SettlingRow kSettling[] = {
     {0.02, 0.806, 0.934, 0.80773307022245343, 0.93662884357571398},
     {0.05, 0.643, 0.844, 0.64442977618390043, 0.84624204398863803},
@@ -268,6 +285,7 @@ constexpr SettlingRow kSettling[] = {
     {0.30, 0.166, 0.300, 0.16652518959722124, 0.30049230466972818},
     {0.40, 0.099, 0.174, 0.098908824340115417, 0.17481357541723407},
 };
+// clang-format on
 
 TEST(DragSettling, HomogeneousSlipMatchesIndependentSolve) {
   const double u_t = cgd::schiller_naumann_terminal_velocity(kD, kRhoP, kRhoF, kMuF, kG);
@@ -312,12 +330,17 @@ TEST(DragSettling, SlipSatisfiesTheForceBalanceAndFallsWithConcentration) {
 }
 
 TEST(DragSettling, RejectsUnphysicalInput) {
-  EXPECT_THROW(cgd::homogeneous_slip_over_ut(DragLaw::Beetstra, kParams, 1.0, kRhoP, kG, 0.2), cgd::InputError);
-  EXPECT_THROW(cgd::homogeneous_slip_over_ut(DragLaw::Beetstra, kParams, -0.1, kRhoP, kG, 0.2), cgd::InputError);
+  EXPECT_THROW(cgd::homogeneous_slip_over_ut(DragLaw::Beetstra, kParams, 1.0, kRhoP, kG, 0.2),
+               cgd::InputError);
+  EXPECT_THROW(cgd::homogeneous_slip_over_ut(DragLaw::Beetstra, kParams, -0.1, kRhoP, kG, 0.2),
+               cgd::InputError);
   EXPECT_THROW(cgd::homogeneous_slip_over_ut(DragLaw::Beetstra, kParams, 0.1, 1.0, kG, 0.2), cgd::InputError);
-  EXPECT_THROW(cgd::homogeneous_slip_over_ut(DragLaw::Beetstra, kParams, 0.1, kRhoP, 0.0, 0.2), cgd::InputError);
-  EXPECT_THROW(cgd::homogeneous_slip_over_ut(DragLaw::Beetstra, kParams, 0.1, kRhoP, kG, 0.0), cgd::InputError);
-  EXPECT_THROW(cgd::terminal_velocity(DragLaw::WenYu, DragParams{kRhoF, 0.0, kD}, kRhoP, kG), cgd::InputError);
+  EXPECT_THROW(cgd::homogeneous_slip_over_ut(DragLaw::Beetstra, kParams, 0.1, kRhoP, 0.0, 0.2),
+               cgd::InputError);
+  EXPECT_THROW(cgd::homogeneous_slip_over_ut(DragLaw::Beetstra, kParams, 0.1, kRhoP, kG, 0.0),
+               cgd::InputError);
+  EXPECT_THROW(cgd::terminal_velocity(DragLaw::WenYu, DragParams{kRhoF, 0.0, kD}, kRhoP, kG),
+               cgd::InputError);
 }
 
 }  // namespace
