@@ -5,7 +5,10 @@
 //   tangential  xi  <- xi - n (n . xi) + v_t dt     (history spring kept in the tangent plane)
 //               F_t = -k_t xi - gamma_t v_t,  |F_t| <= mu |F_n|;  when sliding, F_t is scaled to
 //               mu|F_n| and xi is rescaled so that k_t |xi| = mu |F_n|.
-//   torque on i  T_i = (-R_i n) x F_t        (n points from j to i; contact point at -R_i n)
+//   torque on i  T_i = (-a_i n) x F_t,  lever arm a_i = R_i - delta/2: the contact point is the middle
+//               of the overlap (n points from j to i), so a_i + a_j = |x_i - x_j| and the pair's forces
+//               act at one point -- spin + orbital angular momentum is conserved exactly. (LAMMPS'
+//               gran/hooke/history uses a_i = R_i, which leaks angular momentum in proportion to delta.)
 // The evaluator is odd under exchange of i and j in exact IEEE arithmetic (every input flips sign,
 // every operation commutes with negation), so F_ij = -F_ji bit for bit and the history of j is the
 // negated history of i: momentum is conserved to round-off with a newton-off full neighbour list.
@@ -50,8 +53,9 @@ struct SpringDashpot {
   inline V3 force(V3 dx, double r, double overlap, V3 dv, V3 w_i, V3 w_j, double radius_i, double radius_j,
                   double* xi, V3& torque_i) const {
     const V3 n = (1.0 / r) * dx;
-    // relative velocity of the contact points: v_i - v_j - (R_i w_i + R_j w_j) x n
-    const V3 vc = dv - cross(radius_i * w_i + radius_j * w_j, n);
+    const double arm_i = radius_i - 0.5 * overlap, arm_j = radius_j - 0.5 * overlap;
+    // relative velocity of the contact points: v_i - v_j - (a_i w_i + a_j w_j) x n
+    const V3 vc = dv - cross(arm_i * w_i + arm_j * w_j, n);
     const double vn = dot(vc, n);
     const V3 vt = vc - vn * n;
     const double fn = std::max(0.0, p.k_n * overlap - p.gamma_n * vn);
@@ -69,7 +73,7 @@ struct SpringDashpot {
       if (s_mag > 0.0) s = (fmax / (p.k_t * s_mag)) * s;
     }
     store3(xi, s);
-    torque_i = torque_i + cross(-radius_i * n, ft);
+    torque_i = torque_i + cross(-arm_i * n, ft);
     return fn * n + ft;
   }
 };

@@ -27,7 +27,8 @@ bool grow_packing(const std::array<double, 3>& L, double d_start, double d_targe
   const double ratio = std::pow(d_target / d_start, 1.0 / kStages);
   double d = d_start / d_target;
   for (int stage = 0; stage <= kStages + 20; ++stage) {
-    if (stage > 0 && stage <= kStages) d = std::min(1.0, d * ratio);
+    // the last stage lands on the target exactly (repeated multiplication may stop an ulp short)
+    if (stage > 0 && stage <= kStages) d = stage == kStages ? 1.0 : std::min(1.0, d * ratio);
     const double mass = 1.0, k_n = 1.0;
     const cgd::SpringDashpot sd = spring_dashpot(k_n, 0.1, 0.5 * mass, 3.5, 1.0);
     DemSettings s;

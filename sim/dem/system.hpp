@@ -47,6 +47,9 @@ struct Diagnostics {
 class DemSystem {
  public:
   DemSystem(const DemSettings& settings, MPI_Comm comm);
+  // The ghost exchange holds a reference to this object's slab decomposition: not copyable/movable.
+  DemSystem(const DemSystem&) = delete;
+  DemSystem& operator=(const DemSystem&) = delete;
 
   /// Give this rank its owned particles (ids, positions, velocities, angular velocities or empty).
   /// Particles outside the slab are moved to their owner at the first rebuild.

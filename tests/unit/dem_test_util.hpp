@@ -18,16 +18,20 @@ namespace cgd::dem::test {
 
 using cgd::dem::V3;
 
-inline double norm(V3 a) { return std::sqrt(dot(a, a)); }
-inline V3 normalized(V3 a) { return (1.0 / norm(a)) * a; }
+inline double norm(V3 a) {
+  return std::sqrt(dot(a, a));
+}
+inline V3 normalized(V3 a) {
+  return (1.0 / norm(a)) * a;
+}
 
 /// The paper's particles (models.md, Table 1): d = 75 um, rho_p = 1500 kg/m^3.
 struct PaperParticle {
-  double d = 75e-6;                                          // m
-  double rho = 1500.0;                                       // kg/m^3
-  double mass = rho * std::numbers::pi / 6.0 * d * d * d;    // kg
-  double radius = 0.5 * d;                                   // m
-  double inertia = 0.4 * mass * radius * radius;             // solid sphere, kg m^2
+  double d = 75e-6;                                        // m
+  double rho = 1500.0;                                     // kg/m^3
+  double mass = rho * std::numbers::pi / 6.0 * d * d * d;  // kg
+  double radius = 0.5 * d;                                 // m
+  double inertia = 0.4 * mass * radius * radius;           // solid sphere, kg m^2
 };
 
 /// The paper's contact: k_n = 1.27 N/m, k_n/k_t = 7/2, gamma_n/gamma_t = 1, m_eff = m/2.
@@ -59,11 +63,11 @@ inline DemSettings paper_settings(double e, double mu, double box_d, double step
 
 /// One particle's state at step n, read between advance() and commit().
 struct StepState {
-  V3 x{0, 0, 0};                       // x_n
-  V3 v_half_before{0, 0, 0};           // v_{n-1/2}
-  V3 v_half_after{0, 0, 0};            // v_{n+1/2}
-  V3 w_half_before{0, 0, 0};           // w_{n-1/2} (zero without rotation)
-  V3 w_half_after{0, 0, 0};            // w_{n+1/2}
+  V3 x{0, 0, 0};              // x_n
+  V3 v_half_before{0, 0, 0};  // v_{n-1/2}
+  V3 v_half_after{0, 0, 0};   // v_{n+1/2}
+  V3 w_half_before{0, 0, 0};  // w_{n-1/2} (zero without rotation)
+  V3 w_half_after{0, 0, 0};   // w_{n+1/2}
 };
 
 /// Runs one step and returns the state of particles 0..count-1 (by id) at that step.
@@ -110,7 +114,7 @@ inline double zero_crossing(double before, double after, std::size_t k) {
 /// equals -1 exactly), and the spheres then separate force-free, so
 ///   e_clip = exp(-(beta/omega) theta*),
 /// larger than the nominal e = exp(-(beta/omega) pi) of the unclipped oscillator (Schwager & Poeschel,
-/// Phys. Rev. E 75 (2008) 051304). The overlap reaches zero (sin theta*)/omega after t*, so the
+/// Granular Matter 9 (2007) 465). The overlap reaches zero (sin theta*)/omega after t*, so the
 /// duration of the overlap is T = (theta* + sin theta*)/omega = t_c (theta* + sin theta*)/pi.
 struct ClippedCollision {
   double restitution = 0;     // e_clip
