@@ -95,7 +95,7 @@ int main(int argc, char** argv) {
     cgd::parse_command_line(app, argc, argv, "cgd-bench-dem");
     const std::string case_name = std::filesystem::path(data).stem().string();
     if (scene_path.empty()) scene_path = std::string(CGD_SOURCE_DIR) + "/data/scenes/bench_" + case_name + ".toml";
-    const DataFile d = read_lammps_data(data);
+    DataFile d = read_lammps_data(data);
     cgd::Scene scene = cgd::load_scene(scene_path);
     scene.domain.size_m = d.box;
     cgd::dem::DemSettings settings = cgd::dem_settings_from_scene(scene);
@@ -115,7 +115,9 @@ int main(int argc, char** argv) {
       v.insert(v.end(), &d.v[3 * i], &d.v[3 * i + 3]);
       w.insert(w.end(), &d.w[3 * i], &d.w[3 * i + 3]);
     }
-    sys.set_particles(ids, x, v, settings.friction ? w : std::vector<double>{});
+    const std::int64_t n_total = d.n;
+    d = DataFile{};  // the file's copy is not needed any more: peak memory is the engine's
+    sys.set_particles(std::move(ids), std::move(x), std::move(v), settings.friction ? std::move(w) : std::vector<double>{});
     for (long s = 0; s < neq; ++s) sys.step();
     const std::vector<double> before = sys.timers().all_seconds();
     const std::int64_t rebuilds_before = sys.rebuilds();
@@ -134,14 +136,14 @@ int main(int argc, char** argv) {
     MPI_Allreduce(MPI_IN_PLACE, &ghosts, 1, MPI_DOUBLE, MPI_SUM, MPI_COMM_WORLD);
     if (rank == 0) {
       std::printf("cgd %s N=%lld ranks=%d loop_s=%.3f ps_per_s_per_core=%.3e bytes_per_particle=%.0f\n",
-                  case_name.c_str(), static_cast<long long>(d.n), ranks, loop,
-                  static_cast<double>(d.n) * static_cast<double>(steps) / loop / ranks, bytes / static_cast<double>(d.n));
+                  case_name.c_str(), static_cast<long long>(n_total), ranks, loop,
+                  static_cast<double>(n_total) * static_cast<double>(steps) / loop / ranks, bytes / static_cast<double>(n_total));
       std::printf("# phases (s, slowest rank):");
       for (std::size_t k = 0; k < phases.size(); ++k)
         std::printf(" %s=%.3f", sys.timers().names()[k].c_str(), phases[k]);
       std::printf("; rebuilds=%lld; list entries/particle=%.2f; ghosts/particle=%.3f\n",
-                  static_cast<long long>(sys.rebuilds() - rebuilds_before), entries / static_cast<double>(d.n),
-                  ghosts / static_cast<double>(d.n));
+                  static_cast<long long>(sys.rebuilds() - rebuilds_before), entries / static_cast<double>(n_total),
+                  ghosts / static_cast<double>(n_total));
     }
     return cgd::kExitOk;
   });

@@ -8,6 +8,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <memory>
 #include <iostream>
 #include <numbers>
 #include <sstream>
@@ -16,7 +17,10 @@
 #include "core/h5.hpp"
 #include "core/output.hpp"
 #include "core/timers.hpp"
+#include "sim/coupling/coupler.hpp"
 #include "sim/dem/placement.hpp"
+#include "sim/fluid/grid.hpp"
+#include "sim/fluid/solver.hpp"
 
 namespace fs = std::filesystem;
 
@@ -72,11 +76,16 @@ dem::DemSettings dem_settings_from_scene(const Scene& scene) {
   s.skin_m = scene.contact.skin_over_dp * d.parcel_diameter_m;
   const Vec3& g = scene.domain.gravity_m_s2;
   s.drive.accel = {g[0], g[1], g[2]};
-  if (scene.fluid) {
+  if (scene.fluid && scene.solves_fluid()) {
     const FluidConfig& f = *scene.fluid;
-    if (scene.solves_fluid())
-      throw InputError(scene.source_path + ": fluid.coupling = \"" + to_string(f.coupling) +
-                       "\": the fluid solver is not part of this build yet; allowed here: \"quiescent\"");
+    if (f.drag == DragLaw::Radl2014 || f.drag == DragLaw::Model)
+      throw InputError(scene.source_path + ": fluid.drag = \"" + to_string(f.drag) +
+                       "\": a filtered drag model belongs to coarse-grid runs (cgd-coarse); resolved runs allow "
+                       "\"beetstra\", \"wen-yu\", \"stokes\"");
+    // the fluid forces arrive per particle from the coupling (sim/coupling/coupler.hpp)
+    s.per_particle_drive = true;
+  } else if (scene.fluid) {
+    const FluidConfig& f = *scene.fluid;
     if (f.drag != DragLaw::Stokes)
       throw InputError(scene.source_path + ": fluid.drag = \"" + to_string(f.drag) +
                        "\" with coupling = \"quiescent\": only \"stokes\" is available for a fluid at rest in this "
@@ -99,6 +108,35 @@ dem::DemSettings dem_settings_from_scene(const Scene& scene) {
 
 namespace {
 
+/// The fluid grid of a scene that solves the fluid (nullptr otherwise). Throws InputError when the
+/// grid cannot be split over the ranks. Collective.
+std::unique_ptr<fluid::FluidGrid> make_grid(const Scene& scene, MPI_Comm comm) {
+  if (!scene.solves_fluid()) return nullptr;
+  return std::make_unique<fluid::FluidGrid>(comm, scene.derived.cells, scene.domain.size_m);
+}
+
+/// DEM settings whose slabs coincide with the fluid grid's rows (FFTW-MPI blocks) when there is one.
+dem::DemSettings make_dem_settings(const Scene& scene, const fluid::FluidGrid* grid, MPI_Comm comm) {
+  dem::DemSettings s = dem_settings_from_scene(scene);
+  if (grid) {
+    int size = 1;
+    MPI_Comm_size(comm, &size);
+    std::vector<int> j0(size);
+    const int mine = grid->j0();
+    MPI_Allgather(&mine, 1, MPI_INT, j0.data(), 1, MPI_INT, comm);
+    for (int r : j0) s.slab_lower_bounds.push_back(r * grid->spacing()[1]);
+  }
+  return s;
+}
+
+/// Mixture density of the periodic sedimentation driving (models.md): <phi> rho_p + <eps> rho_f.
+double mixture_density(const Scene& scene) {
+  const double volume = scene.domain.size_m[0] * scene.domain.size_m[1] * scene.domain.size_m[2];
+  const double phi = static_cast<double>(scene.derived.particle_count) * std::pow(scene.particles.parcel_size, 3) *
+                     scene.derived.particle_volume_m3 / volume;
+  return phi * scene.particles.density_kg_m3 + (1.0 - phi) * scene.fluid->density_kg_m3;
+}
+
 struct Frame {
   std::int64_t step;
   double time;
@@ -108,7 +146,11 @@ struct Frame {
 class RunDriver {
  public:
   RunDriver(const Scene& scene, const RunSettings& settings, MPI_Comm comm)
-      : scene_(scene), settings_(settings), comm_(comm), dem_(dem_settings_from_scene(scene), comm) {
+      : scene_(scene),
+        settings_(settings),
+        comm_(comm),
+        grid_(make_grid(scene, comm)),
+        dem_(make_dem_settings(scene, grid_.get(), comm), comm) {
     MPI_Comm_rank(comm_, &rank_);
     MPI_Comm_size(comm_, &ranks_);
     dir_ = settings_.output_dir;
@@ -121,6 +163,7 @@ class RunDriver {
     t_output_ = run_timers_.add("output");
     t_checkpoint_ = run_timers_.add("checkpoint");
     t_diag_ = run_timers_.add("diagnostics");
+    if (grid_) setup_fluid();
   }
 
   void run() {
@@ -140,6 +183,33 @@ class RunDriver {
   }
 
  private:
+  void setup_fluid() {
+    const FluidConfig& f = *scene_.fluid;
+    const double rho_mix = mixture_density(scene_);
+    const Vec3& g = scene_.domain.gravity_m_s2;
+    fluid::FluidSettings fs;
+    fs.density_kg_m3 = f.density_kg_m3;
+    fs.viscosity_Pa_s = f.viscosity_Pa_s;
+    for (int d = 0; d < 3; ++d) fs.body_force_per_fluid_volume_N_m3[d] = (f.density_kg_m3 - rho_mix) * g[d];
+    t_coupling_ = run_timers_.add("coupling");
+    fluid_ = std::make_unique<fluid::FluidSolver>(*grid_, fs, &run_timers_);
+    coupling::CouplerSettings cs;
+    cs.drag = f.drag;
+    cs.drag_params = {f.density_kg_m3, f.viscosity_Pa_s, scene_.particles.diameter_m};
+    cs.particle_volume_m3 = scene_.derived.particle_volume_m3;
+    cs.parcel_volume_factor = std::pow(scene_.particles.parcel_size, 3);
+    cs.particle_mass_kg = scene_.derived.parcel_mass_kg;
+    cs.two_way = f.coupling == Coupling::TwoWay;
+    cs.pressure_gradient_force = f.pressure_gradient_force;
+    for (int d = 0; d < 3; ++d) cs.particle_body_accel[d] = g[d] * (1.0 - rho_mix / scene_.particles.density_kg_m3);
+    coupler_ = std::make_unique<coupling::Coupler>(cs, *grid_);
+    pressure_gradient_mean_ = {rho_mix * g[0], rho_mix * g[1], rho_mix * g[2]};
+    // Particle drag is explicit over a fluid step (momentum exchange exact, coupler.hpp): keep
+    // dt_fluid beta_max / rho_p <= 0.5, beta_max at the densest admissible state (eps at its floor).
+    const double beta_max = beta_p(f.drag, cs.drag_params, 1.0 - cs.void_fraction_floor, 0.0);
+    dt_fluid_cap_ = 0.5 * scene_.particles.density_kg_m3 / beta_max;
+  }
+
   void check_directory() {
     // Collective decision on rank 0's view of the file system; nothing is written before it.
     int status = 0;
@@ -196,6 +266,14 @@ class RunDriver {
     series_.add_column("max_overlap_rel", 1, "1");
     series_.add_column("neighbor_rebuilds", 1, "1");
     series_.add_column("wall_seconds", 1, "s");
+    if (fluid_) {
+      series_.add_column("dt_fluid", 1, "s");
+      series_.add_column("fluid_kinetic_energy", 1, "J");
+      series_.add_column("continuity_residual_rel", 1, "1");
+      series_.add_column("pressure_iterations", 1, "1");
+      series_.add_column("max_solids_fraction", 1, "1");
+      series_.add_column("floored_cells", 1, "1");
+    }
     for (const std::string& name : phase_names()) series_.add_column("time_" + name + "_s", 1, "s");
   }
 
@@ -215,15 +293,18 @@ class RunDriver {
 
   void append_series_row(std::int64_t step) {
     ScopedPhase t(run_timers_, t_diag_);
-    const dem::Diagnostics d = dem_.diagnostics();
+    // dry runs: between advance and commit (synchronous velocities); coupled: at a fluid-step boundary
+    const dem::Diagnostics d = dem_.diagnostics(!fluid_);
+    fluid::FlowAverages avg;
+    if (fluid_) avg = fluid_->averages();
     const double volume = scene_.domain.size_m[0] * scene_.domain.size_m[1] * scene_.domain.size_m[2];
     const double phi = static_cast<double>(d.particles) * std::pow(scene_.particles.parcel_size, 3) *
                        scene_.derived.particle_volume_m3 / volume;
     std::vector<double> row{static_cast<double>(step) * dt_, static_cast<double>(step), phi};
     if (scene_.fluid) {
-      // fluid at rest: <eps u>/<eps> = 0, slip = -<v>
-      for (int c = 0; c < 3; ++c) row.push_back(-d.velocity_mean[c]);
-      for (int c = 0; c < 3; ++c) row.push_back(0.0);
+      // slip = <eps u>/<eps> - <phi v>/<phi> (models.md); a quiescent fluid has u = 0
+      for (int c = 0; c < 3; ++c) row.push_back(avg.fluid_velocity[c] - d.velocity_mean[c]);
+      for (int c = 0; c < 3; ++c) row.push_back(avg.fluid_velocity[c]);
     }
     for (int c = 0; c < 3; ++c) row.push_back(d.velocity_mean[c]);
     row.push_back(d.kinetic_translational_J);
@@ -236,6 +317,15 @@ class RunDriver {
     double wall = elapsed();
     MPI_Bcast(&wall, 1, MPI_DOUBLE, 0, comm_);  // identical rows on every rank
     row.push_back(wall);
+    if (fluid_) {
+      const fluid::StepReport& r = fluid_->last_report();
+      row.push_back(r.dt_s);
+      row.push_back(avg.kinetic_energy_J);
+      row.push_back(r.continuity_relative);
+      row.push_back(static_cast<double>(r.pressure.iterations));
+      row.push_back(coupler_->max_solids_fraction());
+      row.push_back(static_cast<double>(coupler_->floored_cells()));
+    }
     std::vector<double> phases = phase_seconds();
     MPI_Bcast(phases.data(), static_cast<int>(phases.size()), MPI_DOUBLE, 0, comm_);
     row.insert(row.end(), phases.begin(), phases.end());
@@ -248,8 +338,13 @@ class RunDriver {
     const dem::Particles& p = dem_.particles();
     std::vector<double> x(p.x.begin(), p.x.begin() + 3 * static_cast<std::ptrdiff_t>(p.n_owned));
     for (std::size_t i = 0; i < p.n_owned; ++i) dem_.slabs().wrap(&x[3 * i]);
-    const std::vector<double> v = dem_.synchronous_velocity();
-    const std::vector<double> w = dem_.synchronous_angular_velocity();
+    // dry: synchronous v_n between advance and commit; coupled: at a fluid-step boundary, the
+    // leapfrog velocity v_{n-1/2} (the one the drag used), O(dt_DEM) from v_n
+    const std::vector<double> v = fluid_ ? std::vector<double>(p.v.begin(), p.v.begin() + 3 * static_cast<std::ptrdiff_t>(p.n_owned))
+                                         : dem_.synchronous_velocity();
+    const std::vector<double> w = fluid_ ? (p.rotation ? std::vector<double>(p.w.begin(), p.w.begin() + 3 * static_cast<std::ptrdiff_t>(p.n_owned))
+                                                      : std::vector<double>{})
+                                         : dem_.synchronous_angular_velocity();
     const std::vector<double> diameter(p.n_owned, dem_.settings().diameter_m);
     schema::ParticleFields f;
     f.count = static_cast<std::int64_t>(p.n_owned);
@@ -258,8 +353,26 @@ class RunDriver {
     f.velocity = v.data();
     f.angular_velocity = p.rotation ? w.data() : nullptr;
     f.diameter = diameter.data();
+    schema::FluidFields ff;
+    fluid::FileOrderFields fo;
+    if (fluid_) {
+      const coupling::ParticleCoupling& pc = coupler_->particles();
+      f.drag_coefficient = pc.beta.data();
+      f.fluid_velocity = pc.fluid_velocity.data();
+      f.pressure_gradient = pc.pressure_gradient.data();
+      f.pressure_gradient_mean = pressure_gradient_mean_;
+      fluid_->fill_file_order(fo);
+      ff.cells = grid_->cells();
+      ff.spacing_m = grid_->spacing();
+      ff.origin_m = {0.0, 0.0, 0.0};
+      ff.y_offset = grid_->j0();
+      ff.y_count = grid_->ny_local();
+      ff.void_fraction = fo.void_fraction.data();
+      ff.velocity = fo.velocity.data();
+      ff.pressure = fo.pressure.data();
+    }
     schema::write_snapshot((dir_ / "snapshots" / name).string(), comm_, scene_, static_cast<double>(step) * dt_, step,
-                           f);
+                           f, fluid_ ? &ff : nullptr);
     if (add_frame) {
       std::int64_t n = f.count;
       MPI_Allreduce(MPI_IN_PLACE, &n, 1, MPI_INT64_T, MPI_SUM, comm_);
@@ -276,6 +389,12 @@ class RunDriver {
       x.time_s = fr.time;
       x.particle_count = fr.count;
       x.has_angular_velocity = dem_.particles().rotation;
+      if (grid_) {
+        x.has_fluid = true;
+        x.cells = grid_->cells();
+        x.spacing_m = grid_->spacing();
+        x.origin_m = {0.0, 0.0, 0.0};
+      }
       out.push_back(x);
     }
     return out;
@@ -335,9 +454,53 @@ class RunDriver {
       file.create_group("/contacts");
       file.write_rows("/contacts/partner", store.partner.data(), m, 1);
       file.write_rows("/contacts/spring", store.xi.data(), m, 3);
+      if (fluid_) write_fluid_state(file);
     });
     write_series();
     last_checkpoint_wall_ = wall_seconds();
+  }
+
+  // Fluid state of a checkpoint: this rank's owned planes in grid order (y, z, x), concatenated over
+  // ranks in y order -- the global (y, z, x) order, so any rank count can read it back.
+  void write_fluid_state(h5::File& file) {
+    fluid::FluidState& st = fluid_->state();
+    const std::size_t first = grid_->first_owned(), count = grid_->owned_size();
+    auto rows = [&](const std::string& name, const std::vector<double>& field) {
+      file.write_rows("/fluid/" + name, field.data() + first, static_cast<std::int64_t>(count), 1);
+    };
+    file.create_group("/fluid");
+    file.set_attr("/fluid", "dt_previous", st.dt_previous_s);
+    file.set_attr("/fluid", "steps", fluid_steps_);
+    rows("velocity_x", st.velocity[0]);
+    rows("velocity_y", st.velocity[1]);
+    rows("velocity_z", st.velocity[2]);
+    rows("pressure", st.pressure);
+    rows("void_fraction_old", st.void_fraction_old);
+    rows("explicit_rate_x", st.explicit_rate_old[0]);
+    rows("explicit_rate_y", st.explicit_rate_old[1]);
+    rows("explicit_rate_z", st.explicit_rate_old[2]);
+  }
+
+  void read_fluid_state(const h5::File& file) {
+    fluid::FluidState& st = fluid_->state();
+    const std::size_t first = grid_->first_owned(), count = grid_->owned_size();
+    const std::int64_t offset = static_cast<std::int64_t>(grid_->j0()) * static_cast<std::int64_t>(grid_->plane());
+    auto rows = [&](const std::string& name, std::vector<double>& field) {
+      const std::vector<double> data = file.read_rows_double("/fluid/" + name, offset, static_cast<std::int64_t>(count));
+      std::copy(data.begin(), data.end(), field.begin() + static_cast<std::ptrdiff_t>(first));
+    };
+    rows("velocity_x", st.velocity[0]);
+    rows("velocity_y", st.velocity[1]);
+    rows("velocity_z", st.velocity[2]);
+    rows("pressure", st.pressure);
+    rows("void_fraction_old", st.void_fraction_old);
+    rows("explicit_rate_x", st.explicit_rate_old[0]);
+    rows("explicit_rate_y", st.explicit_rate_old[1]);
+    rows("explicit_rate_z", st.explicit_rate_old[2]);
+    st.dt_previous_s = file.attr_double("/fluid", "dt_previous");
+    fluid_steps_ = file.attr_int("/fluid", "steps");
+    grid_->exchange_ghosts({st.velocity[0].data(), st.velocity[1].data(), st.velocity[2].data(), st.pressure.data(),
+                            st.void_fraction_old.data()});
   }
 
   void load_checkpoint() {
@@ -422,6 +585,7 @@ class RunDriver {
     const auto fc = file.attr_ints("/", "frame_counts");
     for (std::size_t k = 0; k < fs_.size(); ++k) frames_.push_back({fs_[k], ft[k], fc[k]});
     placement_method_ = file.attr_string("/", "placement_method");
+    if (fluid_) read_fluid_state(file);
     file.close();
     const fs::path series_path = dir_ / "series.h5";
     if (fs::exists(series_path)) {
@@ -464,6 +628,7 @@ class RunDriver {
   }
 
   void time_loop() {
+    if (fluid_) return time_loop_coupled();
     loop_start_wall_ = wall_seconds();
     last_checkpoint_wall_ = loop_start_wall_;
     loop_start_step_ = dem_.step_index();
@@ -502,6 +667,67 @@ class RunDriver {
         dem_.commit();
       } catch (const RunError&) {
         // Keep the last good checkpoint; leave the failed state for diagnosis.
+        diagnostic_snapshot();
+        write_series();
+        throw;
+      }
+      progress(dem_.step_index(), false);
+    }
+    progress(end_step_, true);
+  }
+
+  /// Checkpoint and interruption agreement at a step boundary (shared by both loops).
+  void checkpoint_if_due(std::int64_t step) {
+    if (step == end_step_ && restarted_from_ != step) write_checkpoint();  // the final state can be extended
+    if (step == end_step_) return;
+    int flags[2] = {g_interrupted ? 1 : 0, 0};
+    if (rank_ == 0 && wall_seconds() - last_checkpoint_wall_ >= scene_.run.checkpoint_wall_s) flags[1] = 1;
+    MPI_Allreduce(MPI_IN_PLACE, flags, 2, MPI_INT, MPI_MAX, comm_);
+    if (flags[0]) {
+      write_checkpoint();
+      progress(step, true);
+      throw RunError("interrupted at step " + std::to_string(step) + " (t = " +
+                     std::to_string(static_cast<double>(step) * dt_) + " s); checkpoint written, continue with " +
+                     "--restart");
+    }
+    if (flags[1] && step != restarted_from_) write_checkpoint();
+  }
+
+  /// Coupled CFD-DEM: one fluid step, then its DEM sub-steps with the fluid forces held constant
+  /// (coupler.hpp). The fluid step is a whole number of DEM steps, cut to land on every snapshot
+  /// time and the end, so output and restart happen at fluid-step boundaries.
+  void time_loop_coupled() {
+    loop_start_wall_ = wall_seconds();
+    last_checkpoint_wall_ = loop_start_wall_;
+    loop_start_step_ = dem_.step_index();
+    const double courant = scene_.fluid->courant;
+    for (;;) {
+      const std::int64_t step = dem_.step_index();
+      checkpoint_if_due(step);
+      {
+        ScopedPhase t(run_timers_, t_coupling_);
+        coupler_->compute_drag(dem_.particles(), fluid_->state());
+      }
+      if (fluid_steps_ == 0) fluid_->reset_history();  // eps_old = eps at the very first step
+      const bool final_step = step >= end_step_;
+      append_series_row(step);
+      if (final_step || step == 0 || (dump_every_ > 0 && step % dump_every_ == 0)) {
+        write_snapshot(step, snapshot_name(step), true);
+        write_series();
+      }
+      if (final_step) break;
+      std::int64_t n_sub = std::max<std::int64_t>(1, static_cast<std::int64_t>(fluid_->max_dt(courant, dt_fluid_cap_) / dt_));
+      n_sub = std::min(n_sub, end_step_ - step);
+      if (dump_every_ > 0) n_sub = std::min(n_sub, dump_every_ - step % dump_every_);
+      try {
+        fluid_->step(static_cast<double>(n_sub) * dt_);
+        ++fluid_steps_;
+        {
+          ScopedPhase t(run_timers_, t_coupling_);
+          coupler_->compute_particle_forces(dem_.particles(), fluid_->state());
+        }
+        for (std::int64_t k = 0; k < n_sub; ++k) dem_.step();
+      } catch (const RunError&) {
         diagnostic_snapshot();
         write_series();
         throw;
@@ -575,7 +801,14 @@ class RunDriver {
   MPI_Comm comm_;
   int rank_ = 0, ranks_ = 1;
   fs::path dir_;
+  std::unique_ptr<fluid::FluidGrid> grid_;  // before dem_: the DEM slabs follow the grid's rows
   dem::DemSystem dem_;
+  std::unique_ptr<fluid::FluidSolver> fluid_;
+  std::unique_ptr<coupling::Coupler> coupler_;
+  std::size_t t_coupling_ = 0;
+  std::int64_t fluid_steps_ = 0;
+  double dt_fluid_cap_ = HUGE_VAL;
+  Vec3 pressure_gradient_mean_{};
   double dt_ = 0;
   std::int64_t end_step_ = 0, dump_every_ = 0, series_every_ = 1;
   schema::Series series_;

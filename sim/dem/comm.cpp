@@ -82,6 +82,15 @@ void GhostExchange::pack(const Particles& p, const Swap& s, std::vector<double>&
 void GhostExchange::build(Particles& p, double cutoff) {
   swaps_.clear();
   p.resize(p.n_owned, p.n_owned);
+  // Reserve room for the ghosts up front: the ghost shell's share of the particles (faces of width
+  // `cutoff` around the slab, 25 % margin) or 25 % more than last time, whichever is larger.
+  {
+    const auto& L = slabs_.box();
+    const double slab = slabs_.y_hi() - slabs_.y_lo();
+    const double shell = (1 + 2 * cutoff / L[0]) * (1 + 2 * cutoff / L[2]) * (1 + 2 * cutoff / slab) - 1;
+    const double estimate = 1.25 * std::max(shell * static_cast<double>(p.n_owned), static_cast<double>(ghosts_));
+    p.reserve(p.n_owned + static_cast<std::size_t>(estimate) + 64);
+  }
   const int rank = slabs_.rank(), size = slabs_.size();
   for (int dim : {0, 2, 1}) {
     const std::size_t candidates = p.n_total;
@@ -201,6 +210,7 @@ void GhostExchange::migrate(Particles& p, ContactStore& store) {
         std::memcpy(&p.x[3 * kept], &p.x[3 * i], 3 * sizeof(double));
         std::memcpy(&p.v[3 * kept], &p.v[3 * i], 3 * sizeof(double));
         if (p.rotation) std::memcpy(&p.w[3 * kept], &p.w[3 * i], 3 * sizeof(double));
+        if (p.external) std::memcpy(&p.a_ext[3 * kept], &p.a_ext[3 * i], 3 * sizeof(double));
       }
       ++kept;
       if (track_contacts) {
@@ -220,6 +230,7 @@ void GhostExchange::migrate(Particles& p, ContactStore& store) {
     out.insert(out.end(), &p.x[3 * i], &p.x[3 * i + 3]);
     out.insert(out.end(), &p.v[3 * i], &p.v[3 * i + 3]);
     if (p.rotation) out.insert(out.end(), &p.w[3 * i], &p.w[3 * i + 3]);
+    if (p.external) out.insert(out.end(), &p.a_ext[3 * i], &p.a_ext[3 * i + 3]);
     out.push_back(static_cast<double>(c1 - c0));
     for (std::int64_t k = c0; k < c1; ++k) {
       out.push_back(bits_to_double(store.partner[k]));
@@ -254,6 +265,10 @@ void GhostExchange::migrate(Particles& p, ContactStore& store) {
       std::memcpy(&p.v[3 * i], &in[pos + 3], 3 * sizeof(double));
       if (p.rotation) std::memcpy(&p.w[3 * i], &in[pos + 6], 3 * sizeof(double));
       pos += per;
+      if (p.external) {
+        std::memcpy(&p.a_ext[3 * i], &in[pos], 3 * sizeof(double));
+        pos += 3;
+      }
       const auto nc = static_cast<std::int64_t>(in[pos++]);
       for (std::int64_t k = 0; k < nc; ++k) {
         store.partner.push_back(double_to_bits(in[pos]));

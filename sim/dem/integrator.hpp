@@ -30,6 +30,13 @@ struct UniformDrive {
   inline V3 operator()(std::size_t, V3 v) const { return accel - drag_rate * v; }
 };
 
+/// Per-particle external acceleration, constant over the DEM sub-steps of a fluid step (coupled runs:
+/// drag from the fluid, pressure-gradient force, gravity and the periodic driving; sim/coupling).
+struct PerParticleDrive {
+  const double* accel = nullptr;  // 3 per owned particle
+  inline V3 operator()(std::size_t i, V3) const { return load3(accel + 3 * i); }
+};
+
 struct KernelStats {
   double max_speed2 = 0;      // max |v_{n+1/2}|^2 (NaN if any velocity is NaN)
   double max_overlap = 0;     // m

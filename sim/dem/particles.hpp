@@ -15,10 +15,12 @@ struct Particles {
   std::size_t n_owned = 0;
   std::size_t n_total = 0;  // owned + ghosts
   bool rotation = false;    // angular velocity is simulated (friction > 0)
+  bool external = false;    // a per-particle external acceleration is held (coupled runs)
 
   std::vector<std::int64_t> id;  // global id, n_total
   std::vector<double> x, v, w;   // current state, 3 * n_total (w empty without rotation)
   std::vector<double> x_next, v_next, w_next;  // next state, 3 * n_owned used
+  std::vector<double> a_ext;     // external acceleration, 3 per particle (fluid forces, gravity), if external
 
   /// Resize for `owned` particles plus room for `total - owned` ghosts; keeps existing data.
   void resize(std::size_t owned, std::size_t total) {
@@ -33,6 +35,16 @@ struct Particles {
       w.resize(3 * total);
       w_next.resize(3 * total);
     }
+    if (external) a_ext.resize(3 * total);
+  }
+  /// Capacity for `total` particles (owned + ghosts) without the geometric over-allocation that
+  /// growing one swap at a time would cause.
+  void reserve(std::size_t total) {
+    id.reserve(total);
+    for (auto* f : {&x, &v, &x_next, &v_next}) f->reserve(3 * total);
+    if (rotation)
+      for (auto* f : {&w, &w_next}) f->reserve(3 * total);
+    if (external) a_ext.reserve(3 * total);
   }
   void swap_buffers() {
     x.swap(x_next);
@@ -42,7 +54,7 @@ struct Particles {
   std::size_t bytes() const {
     return id.capacity() * sizeof(std::int64_t) +
            (x.capacity() + v.capacity() + w.capacity() + x_next.capacity() + v_next.capacity() +
-            w_next.capacity()) * sizeof(double);
+            w_next.capacity() + a_ext.capacity()) * sizeof(double);
   }
 };
 

@@ -14,6 +14,7 @@ DemSystem::DemSystem(const DemSettings& settings, MPI_Comm comm)
                                                 : SlabDecomposition(comm, settings.box_m, settings.slab_lower_bounds)),
       ghosts_(slabs_) {
   p_.rotation = s_.contacts && s_.friction;
+  p_.external = s_.per_particle_drive;
   const double radius = 0.5 * s_.diameter_m;
   kc_.dt = s_.dt_s;
   kc_.radius = radius;
@@ -84,6 +85,7 @@ void DemSystem::full_rebuild() {
     const std::vector<std::int32_t> order = spatial_order(p_, cutoff());
     Particles sorted;
     sorted.rotation = p_.rotation;
+    sorted.external = p_.external;
     sorted.resize(p_.n_owned, p_.n_owned);
     ContactStore sorted_store;
     const bool has_store = store_.offset.size() == p_.n_owned + 1;
@@ -93,6 +95,7 @@ void DemSystem::full_rebuild() {
       std::memcpy(&sorted.x[3 * k], &p_.x[3 * i], 3 * sizeof(double));
       std::memcpy(&sorted.v[3 * k], &p_.v[3 * i], 3 * sizeof(double));
       if (p_.rotation) std::memcpy(&sorted.w[3 * k], &p_.w[3 * i], 3 * sizeof(double));
+      if (p_.external) std::memcpy(&sorted.a_ext[3 * k], &p_.a_ext[3 * i], 3 * sizeof(double));
       if (has_store) {
         for (std::int64_t e = store_.offset[i]; e < store_.offset[i + 1]; ++e) {
           sorted_store.partner.push_back(store_.partner[e]);
@@ -120,13 +123,18 @@ void DemSystem::build_ghosts_and_list() {
 
 void DemSystem::advance() {
   ScopedPhase t(timers_, t_force_);
-  if (!s_.contacts) {
-    last_stats_ = advance_particles(p_, list_, NoContact{}, s_.drive, kc_);
-  } else if (p_.rotation) {
-    last_stats_ = advance_particles(p_, list_, SpringDashpot<true>{s_.contact}, s_.drive, kc_);
-  } else {
-    last_stats_ = advance_particles(p_, list_, SpringDashpot<false>{s_.contact}, s_.drive, kc_);
-  }
+  // choose the contact model and the drive once per step, outside the particle loop
+  auto run = [&](const auto& drive) {
+    if (!s_.contacts) {
+      last_stats_ = advance_particles(p_, list_, NoContact{}, drive, kc_);
+    } else if (p_.rotation) {
+      last_stats_ = advance_particles(p_, list_, SpringDashpot<true>{s_.contact}, drive, kc_);
+    } else {
+      last_stats_ = advance_particles(p_, list_, SpringDashpot<false>{s_.contact}, drive, kc_);
+    }
+  };
+  if (s_.per_particle_drive) run(PerParticleDrive{p_.a_ext.data()});
+  else run(s_.drive);
 }
 
 void DemSystem::commit() {
@@ -168,14 +176,16 @@ void DemSystem::commit() {
   if (2.0 * displacement_bound_ > s_.skin_m) rebuild_due_ = true;
 }
 
-Diagnostics DemSystem::diagnostics() const {
+Diagnostics DemSystem::diagnostics(bool synchronous) const {
+  const std::vector<double>& v_later = synchronous ? p_.v_next : p_.v;
+  const std::vector<double>& w_later = synchronous ? p_.w_next : p_.w;
   Diagnostics d;
   const double m = s_.mass_kg, inertia = 1.0 / kc_.inv_inertia;
   double sums[17] = {0};
   for (std::size_t i = 0; i < p_.n_owned; ++i) {
     double vn[3], xn[3];
     for (int c = 0; c < 3; ++c) {
-      vn[c] = 0.5 * (p_.v[3 * i + c] + p_.v_next[3 * i + c]);
+      vn[c] = 0.5 * (p_.v[3 * i + c] + v_later[3 * i + c]);
       xn[c] = p_.x[3 * i + c];
     }
     sums[0] += 0.5 * m * (vn[0] * vn[0] + vn[1] * vn[1] + vn[2] * vn[2]);
@@ -185,11 +195,11 @@ Diagnostics DemSystem::diagnostics() const {
     sums[11] += m * (xn[0] * vn[1] - xn[1] * vn[0]);
     if (p_.rotation) {
       double wn[3];
-      for (int c = 0; c < 3; ++c) wn[c] = 0.5 * (p_.w[3 * i + c] + p_.w_next[3 * i + c]);
+      for (int c = 0; c < 3; ++c) wn[c] = 0.5 * (p_.w[3 * i + c] + w_later[3 * i + c]);
       sums[1] += 0.5 * inertia * (wn[0] * wn[0] + wn[1] * wn[1] + wn[2] * wn[2]);
       for (int c = 0; c < 3; ++c) sums[6 + c] += inertia * wn[c];
     }
-    if (s_.contacts) {
+    if (s_.contacts && list_valid_) {  // before the first step (or after a restart) there is no list yet
       for (std::int64_t e = list_.offset[i]; e < list_.offset[i + 1]; ++e) {
         const std::int32_t j = list_.index[e];
         double r2 = 0;

@@ -30,6 +30,7 @@ struct DemSettings {
   ContactParams contact;
   double skin_m = 0;
   UniformDrive drive;          // gravity/buoyancy and quiescent drag
+  bool per_particle_drive = false;  // coupled runs: particles().a_ext replaces `drive`
   double overlap_limit = 0.25; // relative overlap (of the diameter) taken as a blow-up
   std::int64_t sort_interval_steps = 1000;
   std::vector<double> slab_lower_bounds;  // empty: equal slabs; else one per rank (fluid grid rows)
@@ -69,8 +70,9 @@ class DemSystem {
     commit();
   }
 
-  /// Between advance() and commit(): diagnostics of step n (collective).
-  Diagnostics diagnostics() const;
+  /// Diagnostics of step n (collective). `synchronous`: between advance() and commit(), from the
+  /// synchronous velocities v_n; otherwise at a step boundary, from the leapfrog velocities v_{n-1/2}.
+  Diagnostics diagnostics(bool synchronous = true) const;
   /// Between advance() and commit(): synchronous velocities of the owned particles (3 per particle).
   std::vector<double> synchronous_velocity() const;
   std::vector<double> synchronous_angular_velocity() const;

@@ -1,0 +1,80 @@
+#pragma once
+// Two-way coupling of the DEM and the fluid grid, once per fluid step (models.md, model A):
+//
+//   1. deposit   phi_c = sum_p V_p w_pc / V_cell (TSC, kernel.hpp); eps = 1 - phi_c, with a floor
+//                eps_min applied conservatively (the volume the floor adds is taken back, in
+//                proportion, from the cells above the floor, so sum eps is unchanged and the fluid's
+//                continuity stays exact);
+//   2. drag      per particle: eps_p and u_p = sum_c w_pc u_c (cell-centred u^n), beta_p = law(phi_p,
+//                |u_p - v_p|) (core/drag.hpp), deposited as the cells' implicit drag
+//                B_c = sum_p beta_p V_p w_pc / V_cell and B_c V_c = sum_p beta_p V_p v_p w_pc / V_cell;
+//   3. fluid     step with these (sim/fluid/solver.hpp; drag implicit: B dt/rho_f >> 1 is fine);
+//   4. forces    per particle, from u^{n+1} and p^{n+1} interpolated with the same weights:
+//                a_p = beta_p V_p (u_p^{n+1} - v_p)/m  - V_p grad p_p / m  +  g (1 - rho_mix/rho_p),
+//                held constant over the DEM sub-steps of the fluid step.
+// Momentum: the fluid's drag impulse dt sum_faces B_f (V_f - u_f^{n+1}) V_cell equals minus the
+// particles' dt sum_p beta_p V_p (u_p^{n+1} - v_p) exactly in exact arithmetic, because face values
+// are means of the two cells (solver.hpp), cell-centred u is the mean of the two faces, and
+// deposition and interpolation use the same weights (transposes). Periodic driving (models.md): the
+// mean pressure gradient rho_mix g is removed from p; the fluid gets eps (rho_f - rho_mix) g, each
+// particle -V_p rho_mix g besides m g, so the net force on the box is zero.
+// One-way coupling: steps 1-2 still give eps and the particle drag, but B = 0 in the fluid.
+#include <array>
+#include <vector>
+
+#include "core/drag.hpp"
+#include "core/scene.hpp"
+#include "sim/coupling/exchange.hpp"
+#include "sim/dem/particles.hpp"
+#include "sim/fluid/grid.hpp"
+#include "sim/fluid/solver.hpp"
+
+namespace cgd::coupling {
+
+struct CouplerSettings {
+  DragLaw drag = DragLaw::Beetstra;
+  DragParams drag_params;              // rho_f, mu_f, primary diameter
+  double particle_volume_m3 = 0;       // V_p of the primary
+  double parcel_volume_factor = 1;     // alpha^3: primaries per parcel (drag scales with it)
+  double particle_mass_kg = 0;         // mass of one (parcel) particle
+  bool two_way = true;                 // false: no momentum returned to the fluid (B = 0)
+  bool pressure_gradient_force = true;
+  double void_fraction_floor = 0.3;    // eps_min
+  std::array<double, 3> particle_body_accel{};  // g (1 - rho_mix/rho_p)
+};
+
+/// Per-particle coupling quantities of the last `compute_drag` (owned particles, current order).
+struct ParticleCoupling {
+  std::vector<double> beta;              // beta_p,i, kg m^-3 s^-1
+  std::vector<double> fluid_velocity;    // u at the particle, 3 per particle
+  std::vector<double> pressure_gradient; // grad p at the particle (mean removed), 3 per particle
+};
+
+class Coupler {
+ public:
+  Coupler(const CouplerSettings& settings, const fluid::FluidGrid& grid);
+
+  /// Steps 1 and 2: eps into state.void_fraction; B, V into the state's drag fields; the particles'
+  /// beta, u_p and grad p_p (at the fluid's current level) into `particles()`. Collective.
+  void compute_drag(const dem::Particles& p, fluid::FluidState& state);
+  /// Step 4: the particles' external accelerations (p.a_ext) from the fluid's new level. Collective.
+  void compute_particle_forces(dem::Particles& p, fluid::FluidState& state);
+
+  const ParticleCoupling& particles() const { return pc_; }
+  /// Cells at the void-fraction floor at the last deposit (global count) and the largest phi found.
+  long long floored_cells() const { return floored_; }
+  double max_solids_fraction() const { return max_phi_; }
+  const CouplerSettings& settings() const { return s_; }
+
+ private:
+  void interpolate_fluid(const dem::Particles& p, fluid::FluidState& state);
+  CouplerSettings s_;
+  const fluid::FluidGrid& grid_;
+  GridView view_;
+  std::vector<double> phi_, bv_[3], centre_u_[3], grad_p_[3];
+  ParticleCoupling pc_;
+  long long floored_ = 0;
+  double max_phi_ = 0;
+};
+
+}  // namespace cgd::coupling
