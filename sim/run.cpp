@@ -634,27 +634,10 @@ class RunDriver {
     loop_start_step_ = dem_.step_index();
     for (;;) {
       const std::int64_t step = dem_.step_index();
-      if (step == end_step_ && restarted_from_ != step) write_checkpoint();  // the final state can be extended
-      // every 16 steps: agree on checkpoint (rank 0's clock) and interruption (any rank)
-      if (step % 16 == 0 && step != end_step_) {
-        int flags[2] = {g_interrupted ? 1 : 0, 0};
-        if (rank_ == 0 && wall_seconds() - last_checkpoint_wall_ >= scene_.run.checkpoint_wall_s) flags[1] = 1;
-        MPI_Allreduce(MPI_IN_PLACE, flags, 2, MPI_INT, MPI_MAX, comm_);
-        if (flags[0]) {
-          write_checkpoint();
-          progress(step, true);
-          throw RunError("interrupted at step " + std::to_string(step) + " (t = " +
-                         std::to_string(static_cast<double>(step) * dt_) + " s); checkpoint written, continue with " +
-                         "--restart");
-        }
-        if (flags[1] && step != restarted_from_) write_checkpoint();
-      }
-      try {
-        dem_.prepare();
-        dem_.advance();
-      } catch (const RunError&) {
-        throw;
-      }
+      // every 16 steps (and at the end): agree on checkpoint and interruption; one collective call
+      if (step % 16 == 0 || step == end_step_) checkpoint_if_due(step);
+      dem_.prepare();
+      dem_.advance();
       const bool final_step = step >= end_step_;
       if (step % series_every_ == 0 || final_step) append_series_row(step);
       const bool dump = final_step || step == 0 || (dump_every_ > 0 && step % dump_every_ == 0);
