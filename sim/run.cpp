@@ -629,9 +629,7 @@ class RunDriver {
 
   void time_loop() {
     if (fluid_) return time_loop_coupled();
-    loop_start_wall_ = wall_seconds();
-    last_checkpoint_wall_ = loop_start_wall_;
-    loop_start_step_ = dem_.step_index();
+    begin_loop();
     for (;;) {
       const std::int64_t step = dem_.step_index();
       // every 16 steps (and at the end): agree on checkpoint and interruption; one collective call
@@ -640,23 +638,37 @@ class RunDriver {
       dem_.advance();
       const bool final_step = step >= end_step_;
       if (step % series_every_ == 0 || final_step) append_series_row(step);
-      const bool dump = final_step || step == 0 || (dump_every_ > 0 && step % dump_every_ == 0);
-      if (dump) {
-        write_snapshot(step, snapshot_name(step), true);
-        write_series();
-      }
+      snapshot_if_due(step, final_step);
       if (final_step) break;
-      try {
-        dem_.commit();
-      } catch (const RunError&) {
-        // Keep the last good checkpoint; leave the failed state for diagnosis.
-        diagnostic_snapshot();
-        write_series();
-        throw;
-      }
+      or_diagnose([&] { dem_.commit(); });
       progress(dem_.step_index(), false);
     }
     progress(end_step_, true);
+  }
+
+  void begin_loop() {
+    loop_start_wall_ = wall_seconds();
+    last_checkpoint_wall_ = loop_start_wall_;
+    loop_start_step_ = dem_.step_index();
+  }
+
+  /// A snapshot at step 0, every dump interval and the end, with the series rewritten beside it.
+  void snapshot_if_due(std::int64_t step, bool final_step) {
+    if (!(final_step || step == 0 || (dump_every_ > 0 && step % dump_every_ == 0))) return;
+    write_snapshot(step, snapshot_name(step), true);
+    write_series();
+  }
+
+  /// A failed run keeps its last good checkpoint and leaves the failed state for diagnosis.
+  template <class F>
+  void or_diagnose(F&& body) {
+    try {
+      body();
+    } catch (const RunError&) {
+      diagnostic_snapshot();
+      write_series();
+      throw;
+    }
   }
 
   /// Checkpoint and interruption agreement at a step boundary (shared by both loops).
@@ -680,9 +692,7 @@ class RunDriver {
   /// (coupler.hpp). The fluid step is a whole number of DEM steps, cut to land on every snapshot
   /// time and the end, so output and restart happen at fluid-step boundaries.
   void time_loop_coupled() {
-    loop_start_wall_ = wall_seconds();
-    last_checkpoint_wall_ = loop_start_wall_;
-    loop_start_step_ = dem_.step_index();
+    begin_loop();
     const double courant = scene_.fluid->courant;
     for (;;) {
       const std::int64_t step = dem_.step_index();
@@ -694,15 +704,12 @@ class RunDriver {
       if (fluid_steps_ == 0) fluid_->reset_history();  // eps_old = eps at the very first step
       const bool final_step = step >= end_step_;
       append_series_row(step);
-      if (final_step || step == 0 || (dump_every_ > 0 && step % dump_every_ == 0)) {
-        write_snapshot(step, snapshot_name(step), true);
-        write_series();
-      }
+      snapshot_if_due(step, final_step);
       if (final_step) break;
       std::int64_t n_sub = std::max<std::int64_t>(1, static_cast<std::int64_t>(fluid_->max_dt(courant, dt_fluid_cap_) / dt_));
       n_sub = std::min(n_sub, end_step_ - step);
       if (dump_every_ > 0) n_sub = std::min(n_sub, dump_every_ - step % dump_every_);
-      try {
+      or_diagnose([&] {
         fluid_->step(static_cast<double>(n_sub) * dt_);
         ++fluid_steps_;
         {
@@ -710,11 +717,7 @@ class RunDriver {
           coupler_->compute_particle_forces(dem_.particles(), fluid_->state());
         }
         for (std::int64_t k = 0; k < n_sub; ++k) dem_.step();
-      } catch (const RunError&) {
-        diagnostic_snapshot();
-        write_series();
-        throw;
-      }
+      });
       progress(dem_.step_index(), false);
     }
     progress(end_step_, true);
