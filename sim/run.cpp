@@ -168,13 +168,14 @@ class RunDriver {
 
   void run() {
     check_directory();
+    // Placement can still refuse the scene (InputError): do it before anything is written.
+    if (!settings_.restart) initial_state();
     if (rank_ == 0) {
       fs::create_directories(dir_ / "snapshots");
       write_text_atomically(dir_ / "scene.toml", scene_.effective_toml);
     }
     MPI_Barrier(comm_);
     if (settings_.restart) load_checkpoint();
-    else initial_state();
     print_banner();
     std::signal(SIGINT, on_signal);
     std::signal(SIGTERM, on_signal);
@@ -230,9 +231,14 @@ class RunDriver {
   }
 
   void initial_state() {
-    const dem::Placement placement =
-        dem::place_particles(scene_.domain.size_m, dem_.settings().diameter_m, scene_.derived.particle_count,
-                             scene_.particles.velocity_rms_m_s, scene_.particles.seed);
+    dem::Placement placement;
+    try {
+      placement = dem::place_particles(scene_.domain.size_m, dem_.settings().diameter_m, scene_.derived.particle_count,
+                                       scene_.particles.velocity_rms_m_s, scene_.particles.seed);
+    } catch (const InputError& e) {
+      throw InputError(scene_.source_path + ": particles.solids_fraction = " +
+                       std::to_string(scene_.particles.solids_fraction) + ": " + e.what());
+    }
     placement_method_ = placement.method;
     placement_gap_ = placement.min_gap_rel;
     std::vector<std::int64_t> ids;
@@ -697,6 +703,9 @@ class RunDriver {
     for (;;) {
       const std::int64_t step = dem_.step_index();
       checkpoint_if_due(step);
+      // Ghosts (or a due rebuild) for the current buffers: the series row's contact diagnostics read
+      // them. The first sub-step's prepare() then only refreshes them again (same values).
+      dem_.prepare();
       {
         ScopedPhase t(run_timers_, t_coupling_);
         coupler_->compute_drag(dem_.particles(), fluid_->state());
@@ -706,9 +715,16 @@ class RunDriver {
       append_series_row(step);
       snapshot_if_due(step, final_step);
       if (final_step) break;
-      std::int64_t n_sub = std::max<std::int64_t>(1, static_cast<std::int64_t>(fluid_->max_dt(courant, dt_fluid_cap_) / dt_));
-      n_sub = std::min(n_sub, end_step_ - step);
-      if (dump_every_ > 0) n_sub = std::min(n_sub, dump_every_ - step % dump_every_);
+      // The eps change the fluid sees in a step is the particles' motion over the previous fluid step
+      // (deposit at the start of each step, coupler.hpp), so consecutive fluid steps must be of about
+      // equal length: the DEM steps up to the next snapshot (or the end) are divided evenly over the
+      // fewest fluid steps the Courant limit allows, instead of cutting the last one short.
+      const std::int64_t n_max =
+          std::max<std::int64_t>(1, static_cast<std::int64_t>(fluid_->max_dt(courant, dt_fluid_cap_) / dt_));
+      std::int64_t to_target = end_step_ - step;
+      if (dump_every_ > 0) to_target = std::min(to_target, dump_every_ - step % dump_every_);
+      const std::int64_t fluid_steps_to_target = (to_target + n_max - 1) / n_max;
+      const std::int64_t n_sub = (to_target + fluid_steps_to_target - 1) / fluid_steps_to_target;
       or_diagnose([&] {
         fluid_->step(static_cast<double>(n_sub) * dt_);
         ++fluid_steps_;
