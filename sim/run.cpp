@@ -209,6 +209,14 @@ class RunDriver {
     // dt_fluid beta_max / rho_p <= 0.5, beta_max at the densest admissible state (eps at its floor).
     const double beta_max = beta_p(f.drag, cs.drag_params, 1.0 - cs.void_fraction_floor, 0.0);
     dt_fluid_cap_ = 0.5 * scene_.particles.density_kg_m3 / beta_max;
+    // A fluid step is a whole number of DEM steps: a DEM step longer than the fluid's stability
+    // limits (explicit viscosity, explicit particle drag) cannot be run; refuse it before writing.
+    const double limit = std::min(fluid_->viscous_dt_limit(), dt_fluid_cap_);
+    if (dt_ > limit)
+      throw InputError(scene_.source_path + ": the DEM time step " + std::to_string(dt_) +
+                       " s exceeds the fluid's stability limit " + std::to_string(limit) +
+                       " s (explicit viscosity on cells of " + std::to_string(grid_->spacing()[0]) +
+                       " m, explicit particle drag): lower contact.t_star (or run.dt), or use larger cells");
   }
 
   void check_directory() {
@@ -451,6 +459,7 @@ class RunDriver {
       file.set_attr("/", "frame_times", frame_times);
       file.set_attr("/", "frame_counts", frame_counts);
       file.set_attr("/", "placement_method", placement_method_);
+      file.set_attr("/", "neighbor_rebuilds", dem_.rebuilds());
       file.create_group("/particles");
       file.write_rows("/particles/id", p.id.data(), n, 1);
       file.write_rows("/particles/position", p.x.data(), n, 3);       // unwrapped, as in memory
@@ -591,6 +600,7 @@ class RunDriver {
     const auto fc = file.attr_ints("/", "frame_counts");
     for (std::size_t k = 0; k < fs_.size(); ++k) frames_.push_back({fs_[k], ft[k], fc[k]});
     placement_method_ = file.attr_string("/", "placement_method");
+    dem_.set_rebuilds(file.attr_int("/", "neighbor_rebuilds"));
     if (fluid_) read_fluid_state(file);
     file.close();
     const fs::path series_path = dir_ / "series.h5";
@@ -719,8 +729,15 @@ class RunDriver {
       // (deposit at the start of each step, coupler.hpp), so consecutive fluid steps must be of about
       // equal length: the DEM steps up to the next snapshot (or the end) are divided evenly over the
       // fewest fluid steps the Courant limit allows, instead of cutting the last one short.
-      const std::int64_t n_max =
-          std::max<std::int64_t>(1, static_cast<std::int64_t>(fluid_->max_dt(courant, dt_fluid_cap_) / dt_));
+      const double dt_fluid_max = fluid_->max_dt(courant, dt_fluid_cap_);
+      if (dt_fluid_max < dt_) {
+        diagnostic_snapshot();
+        write_series();
+        throw RunError("at step " + std::to_string(step) + " (t = " + std::to_string(static_cast<double>(step) * dt_) +
+                       " s) the fluid's Courant limit " + std::to_string(dt_fluid_max) +
+                       " s fell below one DEM step (" + std::to_string(dt_) + " s): the flow is too fast for this grid");
+      }
+      const std::int64_t n_max = static_cast<std::int64_t>(dt_fluid_max / dt_);
       std::int64_t to_target = end_step_ - step;
       if (dump_every_ > 0) to_target = std::min(to_target, dump_every_ - step % dump_every_);
       const std::int64_t fluid_steps_to_target = (to_target + n_max - 1) / n_max;

@@ -63,10 +63,11 @@ void DemSystem::restore(ContactStore store, double displacement_bound, bool rebu
 }
 
 void DemSystem::prepare() {
-  if (!s_.contacts) return;  // no neighbour search and no ghosts at all
-  if (rebuild_due_) {
+  if (rebuild_due_) {  // without contacts: only wrap and migrate (no ghosts, no neighbour search)
     ScopedPhase t(timers_, t_neigh_);
     full_rebuild();
+  } else if (!s_.contacts) {
+    return;
   } else if (!list_valid_) {
     ScopedPhase t(timers_, t_neigh_);
     build_ghosts_and_list();
@@ -108,7 +109,7 @@ void DemSystem::full_rebuild() {
     if (has_store) store_ = std::move(sorted_store);
     last_sort_step_ = step_;
   }
-  build_ghosts_and_list();
+  if (s_.contacts) build_ghosts_and_list();
   displacement_bound_ = 0.0;
   rebuild_due_ = false;
   ++rebuilds_;

@@ -88,6 +88,7 @@ class DemSystem {
   bool rebuild_due() const { return rebuild_due_; }
   std::int64_t last_sort_step() const { return last_sort_step_; }
   std::int64_t rebuilds() const { return rebuilds_; }
+  void set_rebuilds(std::int64_t n) { rebuilds_ = n; }  // restart: the counter continues
   /// Largest overlap / diameter over all ranks at the last committed step.
   double last_max_overlap_rel() const { return last_max_overlap_rel_; }
   std::size_t neighbor_entries() const { return list_.entries(); }

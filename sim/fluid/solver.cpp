@@ -63,7 +63,6 @@ FluidSolver::FluidSolver(const FluidGrid& grid, const FluidSettings& settings, P
     q_[d] = grid_.make_field();
     K_[d] = grid_.make_field();
   }
-  div_ = grid_.make_field();
   rhs_ = grid_.make_field();
   if (timers_) {
     phase_predictor_ = timers_->add("fluid predictor");
@@ -83,7 +82,11 @@ void FluidSolver::reset_history() {
   state_.dt_previous_s = 0.0;
 }
 
-// F^n = -rho_f div(M u) + eps^n_f mu_f [lap u + grad(div u)] on the owned faces, M = eps^n_f u^n.
+// F^n = -rho_f div(M u) + div(eps^n tau^n) on the owned faces, M = eps^n_f u^n,
+// tau = mu_f (grad u + grad u^T).
+// Both are written as differences of fluxes: advective fluxes on the faces of the momentum control
+// volumes, eps tau at the cell centres (normal stresses) and on the cell edges (shear stresses). Each
+// flux is computed once and read by the two control volumes it separates.
 void FluidSolver::explicit_rate() {
   const FluidGrid& g = grid_;
   const int nx = g.nx(), nz = g.nz(), rows = g.ny_local();
@@ -91,7 +94,6 @@ void FluidSolver::explicit_rate() {
   const auto &zp = g.z_plus(), &zm = g.z_minus();
   const auto& h = g.spacing();
   const double ihx = 1.0 / h[0], ihy = 1.0 / h[1], ihz = 1.0 / h[2];
-  const double ihx2 = ihx * ihx, ihy2 = ihy * ihy, ihz2 = ihz * ihz;
   const double rho = settings_.density_kg_m3, mu = settings_.viscosity_Pa_s;
   const double* __restrict eps = state_.void_fraction_old.data();
   const double* __restrict ux = state_.velocity[0].data();
@@ -100,9 +102,20 @@ void FluidSolver::explicit_rate() {
   double* __restrict Mx = flux_[0].data();
   double* __restrict My = flux_[1].data();
   double* __restrict Mz = flux_[2].data();
-  double* __restrict div = div_.data();
+  // Stresses times eps (Pa), in work fields that predictor() overwrites afterwards:
+  //   Sxx, Syy, Szz = 2 mu eps du_d/dx_d at the cell centres, eps of the cell;
+  //   Exy at the edge (i h_x, j h_y, (k+1/2) h_z) = mu eps_e (du_x/dy + du_y/dx), eps_e the mean of the
+  //   four cells around the edge; Exz at (i h_x, (j+1/2) h_y, k h_z) and Eyz at ((i+1/2) h_x, j h_y, k h_z)
+  //   likewise. Index of an edge: the cell (i, j, k) whose lower faces meet there.
+  double* __restrict Sxx = q_[0].data();
+  double* __restrict Syy = q_[1].data();
+  double* __restrict Szz = q_[2].data();
+  double* __restrict Exy = K_[0].data();
+  double* __restrict Exz = K_[1].data();
+  double* __restrict Eyz = K_[2].data();
 
-  // Mass fluxes on the faces of rows [-1, ny_local] and div u^n on the cells of rows [-1, ny_local).
+  // Mass fluxes on the faces of rows [-1, ny_local]; normal stresses on the cells of rows [-1, ny_local);
+  // shear stresses on the edges of rows [0, ny_local] (u_x and u_z read E_xy, E_yz one row up).
   for (int j = -1; j <= rows; ++j)
     for (int k = 0; k < nz; ++k) {
       const std::size_t row = g.index(0, j, k), row_zm = g.index(0, j, zm[k]);
@@ -114,14 +127,32 @@ void FluidSolver::explicit_rate() {
             Mz[c] = 0.5 * (eps[row_zm + i] + eps[c]) * uz[c];
           });
     }
+  const double two_mu = 2.0 * mu, quarter_mu = 0.25 * mu;
   for (int j = -1; j < rows; ++j)
     for (int k = 0; k < nz; ++k) {
       const std::size_t row = g.index(0, j, k), row_zp = g.index(0, j, zp[k]);
       periodic_row(
           nx, [&](int i, [[maybe_unused]] int ip, [[maybe_unused]] int im) __attribute__((always_inline)) {
             const std::size_t c = row + i;
-            div[c] =
-                (ux[row + ip] - ux[c]) * ihx + (uy[c + sy] - uy[c]) * ihy + (uz[row_zp + i] - uz[c]) * ihz;
+            const double two_mu_eps = two_mu * eps[c];
+            Sxx[c] = two_mu_eps * ((ux[row + ip] - ux[c]) * ihx);
+            Syy[c] = two_mu_eps * ((uy[c + sy] - uy[c]) * ihy);
+            Szz[c] = two_mu_eps * ((uz[row_zp + i] - uz[c]) * ihz);
+          });
+    }
+  for (int j = 0; j <= rows; ++j)
+    for (int k = 0; k < nz; ++k) {
+      const std::size_t row = g.index(0, j, k), row_zm = g.index(0, j, zm[k]);
+      periodic_row(
+          nx, [&](int i, [[maybe_unused]] int ip, [[maybe_unused]] int im) __attribute__((always_inline)) {
+            const std::size_t c = row + i, cxm = row + im, czm = row_zm + i;
+            const std::size_t cym = c - sy, cxym = cxm - sy, cxzm = row_zm + im, cyzm = czm - sy;
+            Exy[c] = quarter_mu * (eps[c] + eps[cxm] + eps[cym] + eps[cxym]) *
+                     ((ux[c] - ux[cym]) * ihy + (uy[c] - uy[cxm]) * ihx);
+            Exz[c] = quarter_mu * (eps[c] + eps[cxm] + eps[czm] + eps[cxzm]) *
+                     ((ux[c] - ux[czm]) * ihz + (uz[c] - uz[cxm]) * ihx);
+            Eyz[c] = quarter_mu * (eps[c] + eps[cym] + eps[czm] + eps[cyzm]) *
+                     ((uy[c] - uy[czm]) * ihz + (uz[c] - uz[cym]) * ihy);
           });
     }
 
@@ -146,11 +177,9 @@ void FluidSolver::explicit_rate() {
               const double fzx_hi = 0.25 * (Mz[row_zp + im] + Mz[czp]) * (ux[c] + ux[czp]);
               const double fzx_lo = 0.25 * (Mz[cxm] + Mz[c]) * (ux[czm] + ux[c]);
               const double adv = (fxx_hi - fxx_lo) * ihx + (fyx_hi - fyx_lo) * ihy + (fzx_hi - fzx_lo) * ihz;
-              const double lap = (ux[cxp] - 2.0 * ux[c] + ux[cxm]) * ihx2 +
-                                 (ux[cyp] - 2.0 * ux[c] + ux[cym]) * ihy2 +
-                                 (ux[czp] - 2.0 * ux[c] + ux[czm]) * ihz2;
-              const double grad_div = (div[c] - div[cxm]) * ihx;
-              Fx[c] = -rho * adv + mu * 0.5 * (eps[cxm] + eps[c]) * (lap + grad_div);
+              const double visc =
+                  (Sxx[c] - Sxx[cxm]) * ihx + (Exy[cyp] - Exy[c]) * ihy + (Exz[czp] - Exz[c]) * ihz;
+              Fx[c] = -rho * adv + visc;
             }
             // --- u_y on the face (i, j, k): control volume from cell centre j-1 to cell centre j.
             {
@@ -161,11 +190,9 @@ void FluidSolver::explicit_rate() {
               const double fzy_hi = 0.25 * (Mz[czp - sy] + Mz[czp]) * (uy[c] + uy[czp]);
               const double fzy_lo = 0.25 * (Mz[cym] + Mz[c]) * (uy[czm] + uy[c]);
               const double adv = (fxy_hi - fxy_lo) * ihx + (fyy_hi - fyy_lo) * ihy + (fzy_hi - fzy_lo) * ihz;
-              const double lap = (uy[cxp] - 2.0 * uy[c] + uy[cxm]) * ihx2 +
-                                 (uy[cyp] - 2.0 * uy[c] + uy[cym]) * ihy2 +
-                                 (uy[czp] - 2.0 * uy[c] + uy[czm]) * ihz2;
-              const double grad_div = (div[c] - div[cym]) * ihy;
-              Fy[c] = -rho * adv + mu * 0.5 * (eps[cym] + eps[c]) * (lap + grad_div);
+              const double visc =
+                  (Exy[cxp] - Exy[c]) * ihx + (Syy[c] - Syy[cym]) * ihy + (Eyz[czp] - Eyz[c]) * ihz;
+              Fy[c] = -rho * adv + visc;
             }
             // --- u_z on the face (i, j, k): control volume from cell centre k-1 to cell centre k.
             {
@@ -176,11 +203,9 @@ void FluidSolver::explicit_rate() {
               const double fzz_hi = 0.25 * (Mz[c] + Mz[czp]) * (uz[c] + uz[czp]);
               const double fzz_lo = 0.25 * (Mz[czm] + Mz[c]) * (uz[czm] + uz[c]);
               const double adv = (fxz_hi - fxz_lo) * ihx + (fyz_hi - fyz_lo) * ihy + (fzz_hi - fzz_lo) * ihz;
-              const double lap = (uz[cxp] - 2.0 * uz[c] + uz[cxm]) * ihx2 +
-                                 (uz[cyp] - 2.0 * uz[c] + uz[cym]) * ihy2 +
-                                 (uz[czp] - 2.0 * uz[c] + uz[czm]) * ihz2;
-              const double grad_div = (div[c] - div[czm]) * ihz;
-              Fz[c] = -rho * adv + mu * 0.5 * (eps[czm] + eps[c]) * (lap + grad_div);
+              const double visc =
+                  (Exz[cxp] - Exz[c]) * ihx + (Eyz[cyp] - Eyz[c]) * ihy + (Szz[c] - Szz[czm]) * ihz;
+              Fz[c] = -rho * adv + visc;
             }
           });
     }
