@@ -71,7 +71,8 @@ def main(argv=None):
     fig, ax = plt.subplots(figsize=(7, 4.2))
     for r in runs:
         t, s = r["t"], r["s"]
-        label = f"{r['name']} ($\\langle\\phi_p\\rangle$ = {r['phi']:.3g})"
+        # the run directory tells runs of one scene apart (e.g. the same scene with other --set values)
+        label = f"{os.path.basename(os.path.normpath(r['path']))}: {r['name']} ($\\langle\\phi_p\\rangle$ = {r['phi']:.3g})"
         (line,) = ax.plot(t, s, lw=1.0, label=label)
         if len(t) > 1:
             t_end = t[-1]
