@@ -9,9 +9,9 @@ set -uo pipefail
 repo=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
 cd "$repo" || exit 1
 
-run_dir=out/generate/dry_settling
+run_dir=out/generate/sedimentation_demo
 # The main job. Switching to the pipeline is this one line: main_job=(make -f Makefile.pipeline)
-main_job=(build/cgd-generate data/scenes/dry_settling.toml -o "$run_dir")
+main_job=(build/cgd-generate data/scenes/sedimentation_demo.toml -o "$run_dir")
 
 say() { echo "run_demo.sh: $*" >&2; }
 start=$(date +%s)
@@ -87,4 +87,7 @@ else
   echo "== no $run_dir/series.h5"
 fi
 echo
+if /usr/bin/python3 tools/plot_series.py "$run_dir" --homogeneous 0.644 -o "$run_dir/slip.png"; then
+  echo "slip velocity plot: $run_dir/slip.png (dashed: the homogeneous Beetstra balance of models.md)"
+fi
 echo "Open $run_dir/run.xmf in ParaView to look at the run."

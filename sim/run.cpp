@@ -294,7 +294,10 @@ class RunDriver {
   std::vector<std::string> phase_names() const {
     std::vector<std::string> names = dem_.timers().names();
     for (const std::string& n : run_timers_.names()) names.push_back(n);
-    for (std::string& n : names) std::replace(n.begin(), n.end(), '+', '_');
+    for (std::string& n : names) {  // dataset names: "force+integrate" -> force_integrate, "fluid pressure" -> fluid_pressure
+      std::replace(n.begin(), n.end(), '+', '_');
+      std::replace(n.begin(), n.end(), ' ', '_');
+    }
     return names;
   }
   std::vector<double> phase_seconds() const {
