@@ -178,8 +178,8 @@ int main(int argc, char** argv) {
     c.dem_substeps = per_step(step);
     c.dt_fluid_s = per_step(time);
     c.wall_s = per_step(wall);
-    const char* names[] = {"neighbor",        "comm",           "force_integrate",  "coupling",   "fluid predictor",
-                           "fluid pressure",  "fluid correction", "diagnostics",     "output",     "checkpoint"};
+    const char* names[] = {"neighbor",        "comm",           "force_integrate",  "coupling",   "fluid_predictor",
+                           "fluid_pressure",  "fluid_correction", "diagnostics",     "output",     "checkpoint"};
     for (const char* n : names) c.phase_s[n] = per_step(series.column(std::string("time_") + n + "_s"));
     // the step-0 snapshot (and series write) lands in the first interval's "output"
     const std::vector<double>& out = series.column("time_output_s");
@@ -189,7 +189,7 @@ int main(int argc, char** argv) {
     if (rank == 0) {
       const double dem = c.phase_s["neighbor"] + c.phase_s["comm"] + c.phase_s["force_integrate"];
       const double coupling = c.phase_s["coupling"];
-      const double fluid = c.phase_s["fluid predictor"] + c.phase_s["fluid pressure"] + c.phase_s["fluid correction"];
+      const double fluid = c.phase_s["fluid_predictor"] + c.phase_s["fluid_pressure"] + c.phase_s["fluid_correction"];
       const double other = c.phase_s["diagnostics"] + c.phase_s["output"] + c.phase_s["checkpoint"];
       const double untimed = c.wall_s - dem - coupling - fluid - other;
       const double dumps_per_s = full.run.dump_interval_s > 0 ? 1.0 / full.run.dump_interval_s : 0.0;
@@ -226,9 +226,9 @@ int main(int argc, char** argv) {
       line("  ghost exchange + reductions", c.phase_s["comm"]);
       line("  force + integrate", c.phase_s["force_integrate"]);
       line("coupling / mapping (deposit, drag, forces)", coupling);
-      line("fluid predictor", c.phase_s["fluid predictor"]);
-      line("fluid pressure solve", c.phase_s["fluid pressure"]);
-      line("fluid correction", c.phase_s["fluid correction"]);
+      line("fluid predictor", c.phase_s["fluid_predictor"]);
+      line("fluid pressure solve", c.phase_s["fluid_pressure"]);
+      line("fluid correction", c.phase_s["fluid_correction"]);
       line("series diagnostics", c.phase_s["diagnostics"]);
       line("I/O (snapshots, amortised)", io_per_step);
       line("untimed (loop overhead)", untimed);
