@@ -489,14 +489,15 @@ class RunDriver {
     file.create_group("/fluid");
     file.set_attr("/fluid", "dt_previous", st.dt_previous_s);
     file.set_attr("/fluid", "steps", fluid_steps_);
-    rows("velocity_x", st.velocity[0]);
-    rows("velocity_y", st.velocity[1]);
-    rows("velocity_z", st.velocity[2]);
-    rows("pressure", st.pressure);
-    rows("void_fraction_old", st.void_fraction_old);
-    rows("explicit_rate_x", st.explicit_rate_old[0]);
-    rows("explicit_rate_y", st.explicit_rate_old[1]);
-    rows("explicit_rate_z", st.explicit_rate_old[2]);
+    for (const auto& [name, field] : checkpoint_fields(st)) rows(name, *field);
+  }
+
+  /// The fluid fields a bit-exact restart needs (solver.hpp FluidState), by dataset name.
+  static std::vector<std::pair<std::string, std::vector<double>*>> checkpoint_fields(fluid::FluidState& st) {
+    return {{"velocity_x", &st.velocity[0]},          {"velocity_y", &st.velocity[1]},
+            {"velocity_z", &st.velocity[2]},          {"pressure", &st.pressure},
+            {"void_fraction_old", &st.void_fraction_old}, {"explicit_rate_x", &st.explicit_rate_old[0]},
+            {"explicit_rate_y", &st.explicit_rate_old[1]}, {"explicit_rate_z", &st.explicit_rate_old[2]}};
   }
 
   void read_fluid_state(const h5::File& file) {
@@ -507,14 +508,7 @@ class RunDriver {
       const std::vector<double> data = file.read_rows_double("/fluid/" + name, offset, static_cast<std::int64_t>(count));
       std::copy(data.begin(), data.end(), field.begin() + static_cast<std::ptrdiff_t>(first));
     };
-    rows("velocity_x", st.velocity[0]);
-    rows("velocity_y", st.velocity[1]);
-    rows("velocity_z", st.velocity[2]);
-    rows("pressure", st.pressure);
-    rows("void_fraction_old", st.void_fraction_old);
-    rows("explicit_rate_x", st.explicit_rate_old[0]);
-    rows("explicit_rate_y", st.explicit_rate_old[1]);
-    rows("explicit_rate_z", st.explicit_rate_old[2]);
+    for (const auto& [name, field] : checkpoint_fields(st)) rows(name, *field);
     st.dt_previous_s = file.attr_double("/fluid", "dt_previous");
     fluid_steps_ = file.attr_int("/fluid", "steps");
     grid_->exchange_ghosts({st.velocity[0].data(), st.velocity[1].data(), st.velocity[2].data(), st.pressure.data(),
