@@ -768,9 +768,13 @@ class RunDriver {
     const std::string name = "diagnostic_" + snapshot_name(step).substr(5);
     schema::write_snapshot((dir_ / "snapshots" / name).string(), comm_, scene_, static_cast<double>(step) * dt_, step,
                            f);
-    if (rank_ == 0)
+    if (rank_ == 0) {
+      const fs::path checkpoint = dir_ / "checkpoint.h5";
       std::cerr << "diagnostic snapshot: " << (dir_ / "snapshots" / name).string()
-                << "; last good checkpoint kept: " << (dir_ / "checkpoint.h5").string() << "\n";
+                << (fs::exists(checkpoint) ? "; last good checkpoint kept: " + checkpoint.string()
+                                           : std::string("; no checkpoint had been written yet"))
+                << "\n";
+    }
   }
 
   void finish() {

@@ -487,7 +487,7 @@ TEST(SceneDerived, DerivedNumbersFollowTheFormulasOfModelsMd) {
   EXPECT_EQ(x.dt_fluid_s, 0.0);
   // particle count: round(phi V_box / V_p) = round(0.05 * 24*96*24 / (pi/6)) = 5280
   EXPECT_EQ(x.particle_count, 5280);
-  EXPECT_DOUBLE_EQ(x.memory_estimate_bytes, 5280 * 200.0);
+  EXPECT_DOUBLE_EQ(x.memory_estimate_bytes, 5280 * 450.0);
 }
 
 TEST(SceneDerived, PeerBenchmarkStiffnessReproducesParamsInc) {
@@ -521,7 +521,7 @@ TEST(SceneDerived, SolvedFluidDerivesCellsAndCourantTimeStep) {
   EXPECT_EQ(x.cells, (std::array<int, 3>{8, 32, 8}));
   const double cell = 3.0 * 75e-6;  // 24 d_p / 8 cells
   EXPECT_LT(relative(x.dt_fluid_s, 0.3 * cell / x.u_t_m_s), 1e-13);
-  EXPECT_DOUBLE_EQ(x.memory_estimate_bytes, 5280 * 200.0 + 16.0 * 8.0 * (8 * 32 * 8));
+  EXPECT_DOUBLE_EQ(x.memory_estimate_bytes, 5280 * 450.0 + 16.0 * 8.0 * (8 * 32 * 8));
 
   // dx_over_dp: cells = round(box / (dx d))
   const auto t = load_scene_from_string(
