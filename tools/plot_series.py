@@ -76,7 +76,7 @@ def main(argv=None):
         (line,) = ax.plot(t, s, lw=1.0, label=label)
         if len(t) > 1:
             t_end = t[-1]
-            t0 = t_end - a.window if a.window else 0.5 * t_end
+            t0 = max(t_end - a.window, 0.0) if a.window else 0.5 * t_end
             sel = (t >= t0) & (t > 0)
             if sel.any():
                 mean, std = float(np.mean(s[sel])), float(np.std(s[sel]))
