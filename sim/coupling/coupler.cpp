@@ -23,7 +23,7 @@ Coupler::Coupler(const CouplerSettings& settings, const fluid::FluidGrid& grid) 
   }
 }
 
-void Coupler::interpolate_fluid(const dem::Particles& p, fluid::FluidState& state) {
+void Coupler::interpolate_fluid(const dem::Particles& p, fluid::FluidState& state, ParticleCoupling& out) {
   // cell-centred velocity (mean of the two faces) and pressure gradient (central differences) on the
   // owned rows, then the ghost rows from the neighbours: particles near a slab face need them
   const fluid::FluidGrid& g = grid_;
@@ -48,8 +48,8 @@ void Coupler::interpolate_fluid(const dem::Particles& p, fluid::FluidState& stat
   g.exchange_ghosts({centre_u_[0].data(), centre_u_[1].data(), centre_u_[2].data(), grad_p_[0].data(),
                      grad_p_[1].data(), grad_p_[2].data()});
   const std::size_t n = p.n_owned;
-  pc_.fluid_velocity.assign(3 * n, 0.0);
-  pc_.pressure_gradient.assign(3 * n, 0.0);
+  out.fluid_velocity.assign(3 * n, 0.0);
+  out.pressure_gradient.assign(3 * n, 0.0);
   for (std::size_t i = 0; i < n; ++i) {
     double u[3] = {0, 0, 0}, gp[3] = {0, 0, 0};
     for_each_tsc_cell(view_, &p.x[3 * i], [&](std::size_t c, double w) {
@@ -59,8 +59,8 @@ void Coupler::interpolate_fluid(const dem::Particles& p, fluid::FluidState& stat
       }
     });
     for (int d = 0; d < 3; ++d) {
-      pc_.fluid_velocity[3 * i + d] = u[d];
-      pc_.pressure_gradient[3 * i + d] = gp[d];
+      out.fluid_velocity[3 * i + d] = u[d];
+      out.pressure_gradient[3 * i + d] = gp[d];
     }
   }
 }
@@ -106,7 +106,7 @@ void Coupler::compute_drag(const dem::Particles& p, fluid::FluidState& state) {
   }
   g.exchange_ghosts({phi_.data()});
   // 2. fluid at the particles, drag coefficients
-  interpolate_fluid(p, state);
+  interpolate_fluid(p, state, pc_);
   pc_.beta.assign(n, 0.0);
   std::vector<double>& B = state.drag_coefficient;
   std::fill(B.begin(), B.end(), 0.0);
@@ -141,19 +141,17 @@ void Coupler::compute_drag(const dem::Particles& p, fluid::FluidState& state) {
 }
 
 void Coupler::compute_particle_forces(dem::Particles& p, fluid::FluidState& state) {
-  // keep the snapshot quantities of compute_drag; interpolate the new fluid level into temporaries
-  ParticleCoupling at_drag = pc_;
-  interpolate_fluid(p, state);
+  // pc_ keeps compute_drag's quantities (snapshots); the new fluid level goes to new_level_
+  interpolate_fluid(p, state, new_level_);
   const double inv_rho_p = s_.particle_volume_m3 / s_.particle_mass_kg * s_.parcel_volume_factor;  // V/m
   for (std::size_t i = 0; i < p.n_owned; ++i) {
-    const double beta_over_rho = at_drag.beta[i] * inv_rho_p;
+    const double beta_over_rho = pc_.beta[i] * inv_rho_p;
     for (int d = 0; d < 3; ++d) {
-      double a = beta_over_rho * (pc_.fluid_velocity[3 * i + d] - p.v[3 * i + d]) + s_.particle_body_accel[d];
-      if (s_.pressure_gradient_force) a -= inv_rho_p * pc_.pressure_gradient[3 * i + d];
+      double a = beta_over_rho * (new_level_.fluid_velocity[3 * i + d] - p.v[3 * i + d]) + s_.particle_body_accel[d];
+      if (s_.pressure_gradient_force) a -= inv_rho_p * new_level_.pressure_gradient[3 * i + d];
       p.a_ext[3 * i + d] = a;
     }
   }
-  pc_ = std::move(at_drag);
 }
 
 }  // namespace cgd::coupling

@@ -67,12 +67,15 @@ class Coupler {
   const CouplerSettings& settings() const { return s_; }
 
  private:
-  void interpolate_fluid(const dem::Particles& p, fluid::FluidState& state);
+  /// u and grad p of the fluid's current level at every particle, into out.fluid_velocity and
+  /// out.pressure_gradient.
+  void interpolate_fluid(const dem::Particles& p, fluid::FluidState& state, ParticleCoupling& out);
   CouplerSettings s_;
   const fluid::FluidGrid& grid_;
   GridView view_;
   std::vector<double> phi_, bv_[3], centre_u_[3], grad_p_[3];
   ParticleCoupling pc_;
+  ParticleCoupling new_level_;  // the fluid's new level at the particles (compute_particle_forces)
   long long floored_ = 0;
   double max_phi_ = 0;
 };
