@@ -219,8 +219,13 @@ void write_snapshot(const std::string& path, MPI_Comm comm, const Scene& scene, 
         std::any_of(std::begin(arrays), std::end(arrays), [&](const ParticleArray& a) {
           return std::strcmp(a.name, "pressure_gradient") == 0 && global[2 * (&a - arrays)];
         });
-    if (wrote_pressure_gradient)  // record the mean that was removed from it
+    if (wrote_pressure_gradient) {  // record the mean that was removed from it, and the time levels
       f.set_attr("/particles", "pressure_gradient_mean", as_vector(particles.pressure_gradient_mean));
+      f.set_attr("/particles", "time_level",
+                 std::string("position x_n at t_n; velocity: the leapfrog v_{n-1/2} the drag used (coupled runs); "
+                             "drag_coefficient, fluid_velocity, pressure_gradient: fluid level n interpolated to x_n "
+                             "with the TSC kernel (the values of the drag evaluation that starts the fluid step at t_n)"));
+    }
 
     if (with_fluid) {
       const auto n = fluid->cells;  // (n_x, n_y, n_z)
@@ -240,6 +245,20 @@ void write_snapshot(const std::string& path, MPI_Comm comm, const Scene& scene, 
       f.set_attr("/fluid/velocity", "unit", std::string("m/s"));
       f.write_block("/fluid/pressure", fluid->pressure, {nz, ny, nx}, {0, y0, 0}, {nz, yc, nx});
       f.set_attr("/fluid/pressure", "unit", std::string("Pa"));
+      if (fluid->eps_velocity) {
+        f.write_block("/fluid/eps_velocity", fluid->eps_velocity, {nz, ny, nx, 3}, {0, y0, 0, 0}, {nz, yc, nx, 3});
+        f.set_attr("/fluid/eps_velocity", "unit", std::string("m/s"));
+        f.set_attr("/fluid/eps_velocity", "definition",
+                   std::string("cell-centred eps*u: mean of the two faces' eps_f u_f, eps_f the mean of the two "
+                               "cells; sums to the solver's face sum <eps u> exactly"));
+      }
+      // The time level of every field (the filter combines them; see docs/schema-filtered.md)
+      f.set_attr("/fluid", "time_level",
+                 std::string("all fluid fields at the snapshot's time t_n = step * dt_DEM (fluid level n, "
+                             "before the fluid step that starts at t_n)"));
+      f.set_attr("/fluid/pressure", "definition",
+                 std::string("periodic part of the pressure: the mean gradient rho_mix g (/particles attribute "
+                             "pressure_gradient_mean) removed"));
     }
   });
 }

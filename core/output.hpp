@@ -43,6 +43,9 @@ struct FluidFields {
   const double* void_fraction = nullptr;
   const double* velocity = nullptr;
   const double* pressure = nullptr;
+  /// Cell-centred eps u (trailing 3): the mean of the two faces' fluxes eps_f u_f, so that its sum
+  /// over the cells equals the solver's sum over the faces (the series' <eps u>) exactly. Optional.
+  const double* eps_velocity = nullptr;
 };
 
 /// Write a snapshot file atomically (attributes time, step; /params; /particles; /fluid if given).

@@ -387,6 +387,7 @@ class RunDriver {
       ff.void_fraction = fo.void_fraction.data();
       ff.velocity = fo.velocity.data();
       ff.pressure = fo.pressure.data();
+      ff.eps_velocity = fo.eps_velocity.data();
     }
     schema::write_snapshot((dir_ / "snapshots" / name).string(), comm_, scene_, static_cast<double>(step) * dt_, step,
                            f, fluid_ ? &ff : nullptr);

@@ -454,26 +454,39 @@ FlowAverages FluidSolver::averages() {
 void FluidSolver::fill_file_order(FileOrderFields& out) {
   const FluidGrid& g = grid_;
   auto& s = state_;
-  g.exchange_ghosts({s.velocity[0].data(), s.velocity[1].data(), s.velocity[2].data()}, 1);
+  g.exchange_ghosts({s.void_fraction.data(), s.velocity[0].data(), s.velocity[1].data(), s.velocity[2].data()}, 1);
   const int nx = g.nx(), nz = g.nz(), rows = g.ny_local();
+  const auto& zm = g.z_minus();
+  const double* eps = s.void_fraction.data();
   const std::size_t n = g.owned_size(), sy = g.plane();
   const auto& zp = g.z_plus();
   out.void_fraction.resize(n);
   out.pressure.resize(n);
   out.velocity.resize(3 * n);
+  out.eps_velocity.resize(3 * n);
   const double *ux = s.velocity[0].data(), *uy = s.velocity[1].data(), *uz = s.velocity[2].data();
   for (int k = 0; k < nz; ++k)
     for (int j = 0; j < rows; ++j) {
-      const std::size_t row = g.index(0, j, k), row_zp = g.index(0, j, zp[k]);
+      const std::size_t row = g.index(0, j, k), row_zp = g.index(0, j, zp[k]), row_zm = g.index(0, j, zm[k]);
       const std::size_t file_row = (static_cast<std::size_t>(k) * rows + j) * nx;
       periodic_row(
-          nx, [&](int i, [[maybe_unused]] int ip, [[maybe_unused]] int im) __attribute__((always_inline)) {
+          nx, [&](int i, int ip, int im) __attribute__((always_inline)) {
             const std::size_t c = row + i, o = file_row + i;
             out.void_fraction[o] = s.void_fraction[c];
             out.pressure[o] = s.pressure[c];
             out.velocity[3 * o + 0] = 0.5 * (ux[c] + ux[row + ip]);
             out.velocity[3 * o + 1] = 0.5 * (uy[c] + uy[c + sy]);
             out.velocity[3 * o + 2] = 0.5 * (uz[c] + uz[row_zp + i]);
+            // face fluxes eps_f u_f on the low and high face of cell c along each axis
+            const double fx_lo = 0.5 * (eps[row + im] + eps[c]) * ux[c];
+            const double fx_hi = 0.5 * (eps[c] + eps[row + ip]) * ux[row + ip];
+            const double fy_lo = 0.5 * (eps[c - sy] + eps[c]) * uy[c];
+            const double fy_hi = 0.5 * (eps[c] + eps[c + sy]) * uy[c + sy];
+            const double fz_lo = 0.5 * (eps[row_zm + i] + eps[c]) * uz[c];
+            const double fz_hi = 0.5 * (eps[c] + eps[row_zp + i]) * uz[row_zp + i];
+            out.eps_velocity[3 * o + 0] = 0.5 * (fx_lo + fx_hi);
+            out.eps_velocity[3 * o + 1] = 0.5 * (fy_lo + fy_hi);
+            out.eps_velocity[3 * o + 2] = 0.5 * (fz_lo + fz_hi);
           });
     }
 }

@@ -134,8 +134,10 @@ struct FlowAverages {
 
 /// This rank's slab in the file order of the snapshot schema (design.md "Files"): (n_z, ny_local, n_x),
 /// x fastest; velocity at cell centres (mean of the two faces) with a trailing 3.
+/// eps_velocity: cell-centred eps u, the mean of the two faces' eps_f u_f (eps_f = mean of the two
+/// cells), so sum over cells = the solver's face sum (FlowAverages::eps_velocity) exactly.
 struct FileOrderFields {
-  std::vector<double> void_fraction, velocity, pressure;
+  std::vector<double> void_fraction, velocity, pressure, eps_velocity;
 };
 
 class FluidSolver {

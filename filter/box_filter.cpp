@@ -1,0 +1,150 @@
+#include "filter/box_filter.hpp"
+
+#include <cmath>
+#include <stdexcept>
+
+namespace cgd::filter {
+
+AxisOperator axis_operator(double s, double width_cells, int n) {
+  AxisOperator op;
+  double lo = s - 0.5 * width_cells;
+  lo -= n * std::floor(lo / n);
+  if (lo >= n) lo -= n;  // round-off of a tiny negative lo
+  const double hi = lo + width_cells;
+  const double flo = std::floor(lo), fhi = std::floor(hi);
+  const double a = lo - flo, b = hi - fhi;
+  op.lo = static_cast<int>(flo);
+  op.hi = static_cast<int>(fhi);
+  op.value = {-(1.0 - a), -a, 1.0 - b, b};
+  op.slope = {1.0, -1.0, -1.0, 1.0};
+  return op;
+}
+
+template <int K>
+SummedVolumeTable<K>::SummedVolumeTable(const PeriodicGrid& grid, const double* fields,
+                                        std::array<double, 3> max_width_cells) {
+  for (int a = 0; a < 3; ++a) {
+    n_[a] = grid.cells[a];
+    if (!(max_width_cells[a] >= 0) || max_width_cells[a] > 1e7)
+      throw std::invalid_argument("SummedVolumeTable: bad maximum width");
+    m_[a] = n_[a] + static_cast<int>(std::ceil(max_width_cells[a])) + 3;
+  }
+  const std::size_t cells = grid.cell_count();
+  for (std::size_t c = 0; c < cells; ++c)
+    for (int q = 0; q < K; ++q) mean_[q] += fields[K * c + q];
+  for (int q = 0; q < K; ++q) mean_[q] /= static_cast<double>(cells);
+
+  table_.assign(static_cast<std::size_t>(m_[0]) * m_[1] * m_[2] * K, 0.0);
+  // table point (i, j, k) >= 1 receives cell (i-1, j-1, k-1) of the periodic extension ...
+  for (int k = 1; k < m_[2]; ++k)
+    for (int j = 1; j < m_[1]; ++j)
+      for (int i = 1; i < m_[0]; ++i) {
+        const std::size_t c = grid.index((i - 1) % n_[0], (j - 1) % n_[1], (k - 1) % n_[2]);
+        double* t = &table_[at(i, j, k)];
+        for (int q = 0; q < K; ++q) t[q] = fields[K * c + q] - mean_[q];
+      }
+  // ... and prefix sums along x, then y, then z turn cell values into the cumulative integral.
+  for (int k = 1; k < m_[2]; ++k)
+    for (int j = 1; j < m_[1]; ++j)
+      for (int i = 2; i < m_[0]; ++i)
+        for (int q = 0; q < K; ++q) table_[at(i, j, k) + q] += table_[at(i - 1, j, k) + q];
+  for (int k = 1; k < m_[2]; ++k)
+    for (int j = 2; j < m_[1]; ++j)
+      for (int i = 1; i < m_[0]; ++i)
+        for (int q = 0; q < K; ++q) table_[at(i, j, k) + q] += table_[at(i, j - 1, k) + q];
+  for (int k = 2; k < m_[2]; ++k)
+    for (int j = 1; j < m_[1]; ++j)
+      for (int i = 1; i < m_[0]; ++i)
+        for (int q = 0; q < K; ++q) table_[at(i, j, k) + q] += table_[at(i, j, k - 1) + q];
+}
+
+template <int K>
+template <class Wx, class Wy, class Wz>
+std::array<double, K> SummedVolumeTable<K>::combine(const std::array<AxisOperator, 3>& op, const Wx& wx,
+                                                    const Wy& wy, const Wz& wz) const {
+  const int ix[4] = {op[0].lo, op[0].lo + 1, op[0].hi, op[0].hi + 1};
+  const int iy[4] = {op[1].lo, op[1].lo + 1, op[1].hi, op[1].hi + 1};
+  const int iz[4] = {op[2].lo, op[2].lo + 1, op[2].hi, op[2].hi + 1};
+  std::array<double, K> sum{};
+  for (int r = 0; r < 4; ++r) {
+    if (wz[r] == 0.0) continue;
+    for (int q = 0; q < 4; ++q) {
+      const double wyz = wy[q] * wz[r];
+      if (wyz == 0.0) continue;
+      const double* row = &table_[at(0, iy[q], iz[r])];
+      for (int p = 0; p < 4; ++p) {
+        const double w = wx[p] * wyz;
+        const double* t = row + static_cast<std::size_t>(ix[p]) * K;
+        for (int c = 0; c < K; ++c) sum[c] += w * t[c];
+      }
+    }
+  }
+  return sum;
+}
+
+template <int K>
+std::array<double, K> SummedVolumeTable<K>::integral(const std::array<AxisOperator, 3>& op) const {
+  std::array<double, K> sum = combine(op, op[0].value, op[1].value, op[2].value);
+  // the removed mean, integrated over the box exactly: mean x box volume in cells
+  const double volume = (op[0].hi - op[0].lo + op[0].value[1] + op[0].value[3]) *
+                        (op[1].hi - op[1].lo + op[1].value[1] + op[1].value[3]) *
+                        (op[2].hi - op[2].lo + op[2].value[1] + op[2].value[3]);
+  for (int c = 0; c < K; ++c) sum[c] += mean_[c] * volume;
+  return sum;
+}
+
+template <int K>
+std::array<double, K> SummedVolumeTable<K>::integral_slope(const std::array<AxisOperator, 3>& op, int axis) const {
+  return combine(op, axis == 0 ? op[0].slope : op[0].value, axis == 1 ? op[1].slope : op[1].value,
+                 axis == 2 ? op[2].slope : op[2].value);
+}
+
+template class SummedVolumeTable<1>;
+template class SummedVolumeTable<4>;
+
+namespace {
+std::vector<double> interleave_flow(const std::vector<double>& eps, const std::vector<double>& eps_u) {
+  std::vector<double> out(4 * eps.size());
+  for (std::size_t c = 0; c < eps.size(); ++c) {
+    out[4 * c] = eps[c];
+    for (int d = 0; d < 3; ++d) out[4 * c + 1 + d] = eps_u[3 * c + d];
+  }
+  return out;
+}
+std::array<double, 3> width_in_cells(const PeriodicGrid& g, double width_m) {
+  return {width_m / g.spacing_m[0], width_m / g.spacing_m[1], width_m / g.spacing_m[2]};
+}
+}  // namespace
+
+PeriodicBoxFilter::PeriodicBoxFilter(const PeriodicGrid& grid, const std::vector<double>& void_fraction,
+                                     const std::vector<double>& eps_velocity, const std::vector<double>& pressure,
+                                     double max_width_m)
+    : grid_(grid),
+      flow_(grid, interleave_flow(void_fraction, eps_velocity).data(), width_in_cells(grid, max_width_m)),
+      pressure_(grid, pressure.data(), width_in_cells(grid, max_width_m)) {}
+
+FilteredPoint PeriodicBoxFilter::at(const double* position_m, double width_m) const {
+  std::array<AxisOperator, 3> op;
+  double volume_cells = 1.0;
+  for (int a = 0; a < 3; ++a) {
+    const double w = width_m / grid_.spacing_m[a];
+    op[a] = axis_operator(grid_.wrapped_cell_coordinate(position_m[a], a), w, grid_.cells[a]);
+    volume_cells *= w;
+  }
+  const std::array<double, 4> flow = flow_.integral(op);
+  FilteredPoint f;
+  f.void_fraction = flow[0] / volume_cells;
+  for (int d = 0; d < 3; ++d) f.velocity[d] = flow[1 + d] / flow[0];
+  for (int a = 0; a < 3; ++a)
+    f.grad_p[a] = pressure_.integral_slope(op, a)[0] / (volume_cells * grid_.spacing_m[a]);
+  return f;
+}
+
+FilteredPoint PeriodicBoxFilter::domain_average() const {
+  FilteredPoint f;
+  f.void_fraction = flow_.mean()[0];
+  for (int d = 0; d < 3; ++d) f.velocity[d] = flow_.mean()[1 + d] / flow_.mean()[0];
+  return f;
+}
+
+}  // namespace cgd::filter

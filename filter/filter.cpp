@@ -1,0 +1,258 @@
+#include "filter/filter.hpp"
+
+#include <unistd.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstring>
+#include <filesystem>
+#include <iostream>
+#include <map>
+#include <numeric>
+#include <queue>
+#include <random>
+#include <sstream>
+
+#include "core/drag.hpp"
+#include "core/error.hpp"
+#include "core/h5.hpp"
+#include "core/output.hpp"
+#include "core/scene.hpp"
+#include "filter/box_filter.hpp"
+#include "filter/statistics.hpp"
+
+namespace cgd::filter {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+double now_s() {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
+}
+
+std::string fmt(double v) {
+  std::ostringstream o;
+  o.precision(6);
+  o << v;
+  return o.str();
+}
+
+DragLaw micro_law(const RunPlan& run) {
+  const std::string& d = run.physics.drag;
+  if (d == "beetstra") return DragLaw::Beetstra;
+  if (d == "wen-yu") return DragLaw::WenYu;
+  if (d == "stokes") return DragLaw::Stokes;
+  throw InputError(run.path + ": the run's drag law is '" + d +
+                   "'; the filter normalises by a microscopic law (beetstra, wen-yu, stokes): a resolved run uses one");
+}
+
+DragParams drag_params(const RunPhysics& p) { return DragParams{p.fluid_density_kg_m3, p.fluid_viscosity_Pa_s, p.diameter_m}; }
+
+/// splitmix64 (Steele, Lea & Flood 2014): the hash that picks the random per-particle samples.
+std::uint64_t mix(std::uint64_t x) {
+  x += 0x9e3779b97f4a7c15ull;
+  x = (x ^ (x >> 30)) * 0xbf58476d1ce4e5b9ull;
+  x = (x ^ (x >> 27)) * 0x94d049bb133111ebull;
+  return x ^ (x >> 31);
+}
+
+/// The physics that pooled runs must share: name, value in the run, relative tolerance.
+std::vector<std::pair<std::string, std::string>> physics_keys(const RunPlan& r) {
+  const RunPhysics& p = r.physics;
+  return {{"particles.diameter (m)", fmt(p.diameter_m)},
+          {"particles.density (kg/m^3)", fmt(p.particle_density_kg_m3)},
+          {"particles.parcel_size", fmt(p.parcel_size)},
+          {"fluid.density (kg/m^3)", fmt(p.fluid_density_kg_m3)},
+          {"fluid.viscosity (Pa s)", fmt(p.fluid_viscosity_Pa_s)},
+          {"fluid.drag", p.drag},
+          {"fluid.pressure_gradient_force", p.pressure_gradient_force ? "true" : "false"},
+          {"domain.gravity (m/s^2)", fmt(p.gravity_m_s2[0]) + "," + fmt(p.gravity_m_s2[1]) + "," + fmt(p.gravity_m_s2[2])},
+          {"grid spacing (m)", fmt(r.grid.spacing_m[0]) + "," + fmt(r.grid.spacing_m[1]) + "," + fmt(r.grid.spacing_m[2])}};
+}
+
+}  // namespace
+
+std::size_t FilterPlan::snapshot_count() const {
+  std::size_t n = 0;
+  for (const RunPlan& r : runs) n += r.files.size();
+  return n;
+}
+
+std::vector<double> default_widths_m(const PeriodicGrid& grid, double shortest_edge_m) {
+  std::vector<double> w;
+  const double h = grid.cell_size_m();
+  for (int k = 1; 3.0 * k * h <= shortest_edge_m * (1.0 + 1e-9); ++k) w.push_back(k * h);
+  if (w.empty()) w.push_back(h);
+  return w;
+}
+
+FilterPlan plan_filter(const FilterOptions& o) {
+  FilterPlan plan;
+  if (o.run_dirs.empty()) throw InputError("cgd-filter: no run directory given (usage: cgd-filter RUN_DIR... -o FILE)");
+  if (o.output_path.empty()) throw InputError("cgd-filter: no output file given (-o FILE)");
+  if (!(o.bin_width > 0 && o.bin_width <= 0.5))
+    throw InputError("--bins: bin width " + fmt(o.bin_width) + " is not allowed (0 < width <= 0.5)");
+  if (!(o.bin_max > o.bin_width && o.bin_max <= 1.0))
+    throw InputError("--bins: upper end " + fmt(o.bin_max) + " is not allowed (bin width < upper end <= 1)");
+  if (o.from_time_s && o.from_tref) throw InputError("--from-time and --from-tref are alternatives: give one");
+  if (o.samples < 0) throw InputError("--samples: " + std::to_string(o.samples) + " is not allowed (>= 0)");
+  if (o.bootstrap_replicates < 20)
+    throw InputError("--bootstrap: " + std::to_string(o.bootstrap_replicates) +
+                     " replicates is not allowed (>= 20; 1000 for a 95 % interval)");
+  {
+    std::error_code ec;
+    if (fs::exists(o.output_path, ec) && !o.force)
+      throw InputError(o.output_path + ": the output file exists (use --force to overwrite it)");
+    if (fs::is_directory(o.output_path, ec)) throw InputError(o.output_path + ": the output path is a directory");
+  }
+
+  for (const std::string& dir : o.run_dirs) {
+    RunPlan run;
+    run.path = dir;
+    run.directory = list_run_directory(dir);
+    if (run.directory.snapshot_files.empty())
+      throw InputError(dir + ": the run has no snapshots (snapshots/snap_<step>.h5); run cgd-generate first");
+    if (!run.directory.complete)
+      plan.warnings.push_back(dir + ": no DONE marker (the run is in progress or was stopped): filtering its " +
+                              std::to_string(run.directory.snapshot_files.size()) + " complete snapshots");
+    bool first = true;
+    for (const std::string& file : run.directory.snapshot_files) {
+      const Snapshot head = read_snapshot(file, SnapshotContent::HeaderOnly);
+      if (first) {
+        run.physics = head.physics;
+        if (!head.has_fluid || !head.physics.has_fluid)
+          throw InputError(file + ": the run has no fluid fields (a dry or quiescent-fluid run); the filter needs a "
+                                  "coupled CFD-DEM run (fluid.coupling = \"two-way\" or \"one-way\")");
+        run.grid = head.grid;
+        first = false;
+      }
+      double from = 0;
+      if (o.from_time_s) from = *o.from_time_s;
+      if (o.from_tref) from = *o.from_tref * run.physics.t_ref_s;
+      if (head.time_s < from * (1.0 - 1e-12)) continue;
+      run.files.push_back(file);
+      run.times_s.push_back(head.time_s);
+      run.steps.push_back(head.step);
+    }
+    if (run.files.empty())
+      throw InputError(dir + ": no snapshot at or after the --from time (" +
+                       (o.from_tref ? fmt(*o.from_tref) + " t_ref" : fmt(*o.from_time_s) + " s") +
+                       "); the run's snapshots end at step " + std::to_string(run.directory.steps.back()));
+    if (!plan.runs.empty()) {
+      const auto a = physics_keys(plan.runs.front()), b = physics_keys(run);
+      for (std::size_t k = 0; k < a.size(); ++k)
+        if (a[k].second != b[k].second)
+          throw InputError("runs of different physics cannot be pooled: " + a[k].first + " is " + a[k].second + " in " +
+                           plan.runs.front().path + " but " + b[k].second + " in " + dir +
+                           " (pooled runs share particles, fluid, drag law and grid spacing; <phi_p> and the box may differ)");
+    }
+    micro_law(run);  // refuses filtered laws
+    plan.runs.push_back(std::move(run));
+  }
+
+  const RunPlan& r0 = plan.runs.front();
+  double shortest = 1e300;
+  for (const RunPlan& r : plan.runs)
+    for (int a = 0; a < 3; ++a) shortest = std::min(shortest, r.grid.edge_m(a));
+  const double d = r0.physics.diameter_m;
+  const double h_max = std::max({r0.grid.spacing_m[0], r0.grid.spacing_m[1], r0.grid.spacing_m[2]});
+  if (o.widths_over_dp.empty()) {
+    plan.widths_m = default_widths_m(r0.grid, shortest);
+  } else {
+    for (double w : o.widths_over_dp) {
+      const double wm = w * d;
+      if (!(wm >= h_max * (1.0 - 1e-9)) || !(wm <= shortest * (1.0 + 1e-9)))
+        throw InputError("--widths: " + fmt(w) + " d_p is not allowed: a filter width lies between one cell (" +
+                         fmt(h_max / d) + " d_p) and the shortest box edge (" + fmt(shortest / d) + " d_p)");
+      plan.widths_m.push_back(wm);
+    }
+    std::sort(plan.widths_m.begin(), plan.widths_m.end());
+    plan.widths_m.erase(std::unique(plan.widths_m.begin(), plan.widths_m.end()), plan.widths_m.end());
+  }
+  plan.whole_box_width_m = std::cbrt(r0.physics.box_size_m[0] * r0.physics.box_size_m[1] * r0.physics.box_size_m[2]);
+  const int n_bins = static_cast<int>(std::llround(o.bin_max / o.bin_width));
+  for (int b = 0; b <= n_bins; ++b) plan.bin_edges.push_back(b * o.bin_width);
+  return plan;
+}
+
+SnapshotResult filter_snapshot(const Snapshot& s, const FilterPlan& plan, const FilterOptions& o,
+                               std::int64_t snapshot_row, std::size_t run_index) {
+  const RunPlan& run = plan.runs[run_index];
+  if (s.drag_coefficient.empty() || !s.has_fluid)
+    throw InputError(s.path + ": the snapshot lacks the coupling fields (/particles/drag_coefficient, /fluid); "
+                              "the filter needs a coupled run's snapshot");
+  const double t0 = now_s();
+  const std::size_t n_widths = plan.widths_m.size() + 1;  // + whole box
+  const std::size_t n_bins = plan.bin_edges.size() - 1;
+  const double bin_width = plan.bin_edges[1] - plan.bin_edges[0];
+  SnapshotResult out;
+  out.sums.assign(n_widths * n_bins, BinSums{});
+  out.out_of_range.assign(n_widths, 0);
+  out.samples.assign(n_widths, {});
+  out.particles = s.count;
+  const PeriodicBoxFilter box(s.grid, s.void_fraction, s.eps_velocity, s.pressure, plan.widths_m.back());
+  const FilteredPoint whole = box.domain_average();
+  const bool pressure_terms = run.physics.pressure_gradient_force;
+  // max-heaps of the smallest keys per width: the random subsample
+  auto by_key = [](const Sample& a, const Sample& b) { return a.key < b.key; };
+  std::vector<std::priority_queue<Sample, std::vector<Sample>, decltype(by_key)>> heaps(n_widths, decltype(heaps)::value_type(by_key));
+
+  visit_drag_law(micro_law(run), drag_params(run.physics), [&](const auto& law) {
+    for (std::int64_t i = 0; i < s.count; ++i) {
+      const double* x = &s.position[3 * i];
+      const double* v = &s.velocity[3 * i];
+      const double* u = &s.fluid_velocity[3 * i];
+      const double resolved = s.drag_coefficient[i] * (u[1] - v[1]) - (pressure_terms ? s.pressure_gradient[3 * i + 1] : 0.0);
+      for (std::size_t w = 0; w < n_widths; ++w) {
+        const bool is_whole = w + 1 == n_widths;
+        const FilteredPoint f = is_whole ? whole : box.at(x, plan.widths_m[w]);
+        const double phi = 1.0 - f.void_fraction;
+        const double slip[3] = {f.velocity[0] - v[0], f.velocity[1] - v[1], f.velocity[2] - v[2]};
+        const double speed = std::sqrt(slip[0] * slip[0] + slip[1] * slip[1] + slip[2] * slip[2]);
+        const double numerator = resolved + (pressure_terms ? f.grad_p[1] : 0.0);
+        const double beta_micro = law.beta_p(std::clamp(phi, 0.0, 0.99), speed);
+        const double b_real = std::floor(phi / bin_width);
+        if (!(b_real >= 0 && b_real < static_cast<double>(n_bins))) {
+          ++out.out_of_range[w];
+        } else {
+          BinSums& bs = out.sums[w * n_bins + static_cast<std::size_t>(b_real)];
+          bs.count += 1;
+          bs.numerator += numerator;
+          bs.micro += beta_micro * slip[1];
+          bs.slip += slip[1];
+          bs.phi += phi;
+        }
+        if (o.samples > 0) {
+          Sample smp;
+          smp.key = mix(o.seed ^ mix(run_index * 0x100000001b3ull ^ mix(static_cast<std::uint64_t>(s.step) ^
+                                                                        mix(static_cast<std::uint64_t>(s.id[i]) * 131 + w))));
+          auto& heap = heaps[w];
+          if (static_cast<std::int64_t>(heap.size()) < o.samples || smp.key < heap.top().key) {
+            smp.snapshot = snapshot_row;
+            smp.id = s.id[i];
+            smp.phi = phi;
+            smp.numerator = numerator;
+            smp.beta_micro = beta_micro;
+            for (int d = 0; d < 3; ++d) {
+              smp.slip[d] = slip[d];
+              smp.grad_p_filtered[d] = f.grad_p[d];
+            }
+            heap.push(smp);
+            if (static_cast<std::int64_t>(heap.size()) > o.samples) heap.pop();
+          }
+        }
+      }
+    }
+  });
+  for (std::size_t w = 0; w < n_widths; ++w)
+    while (!heaps[w].empty()) {
+      out.samples[w].push_back(heaps[w].top());
+      heaps[w].pop();
+    }
+  out.seconds = now_s() - t0;
+  return out;
+}
+
+}  // namespace cgd::filter

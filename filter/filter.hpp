@@ -1,0 +1,104 @@
+#pragma once
+// cgd-filter's library: filtered slip and filtered drag coefficient of resolved runs, per filter
+// width, binned by the filtered solids fraction (the paper's eqs. 4-5; models.md "Filtering").
+//
+// For every particle i of every snapshot and every filter width Delta (a cube of edge Delta centred
+// on the particle, on the periodic grid, exact for the cell values: filter/box_filter.hpp):
+//   phi_bar_i  = 1 - filter(eps)                                  filtered solids fraction
+//   u_bar_i    = filter(eps u) / filter(eps)                      Favre-filtered fluid velocity (eq. 4)
+//   s_i        = u_bar_i - v_i                                    filtered slip (v_i not filtered)
+//   N_i        = [-grad p_i + grad p_bar_i + beta_p,i (u_i - v_i)]_y     numerator of eq. 5
+//   M_i        = beta_micro(phi_bar_i, |s_i|) s_i,y               what the micro law would give
+// with grad p_i, beta_p,i, u_i, v_i the snapshot's per-particle values (fluid level n at x_n) and
+// grad p_bar_i the exact gradient of the box-filtered pressure. (Runs without the pressure-gradient
+// force leave out both pressure terms: the particle never felt them.) Per phi_bar bin:
+//   beta_bar = sum N_i / sum s_i,y   (a ratio of sums, never a mean of ratios: s_i,y -> 0 is harmless)
+//   H        = 1 - sum N_i / sum M_i   (how a coarse run uses it: beta_bar = (1 - H) beta_micro)
+// and a 95 % interval of H from a block bootstrap over snapshots (see statistics.hpp).
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <mpi.h>
+
+#include "core/snapshot.hpp"
+
+namespace cgd::filter {
+
+struct FilterOptions {
+  std::vector<std::string> run_dirs;
+  std::vector<double> widths_over_dp;          // empty: the default list (default_widths)
+  double bin_width = 0.01;                     // phi_bar bins
+  double bin_max = 0.65;                       // bins cover [0, bin_max)
+  std::optional<double> from_time_s, from_tref;  // drop snapshots before this time
+  std::int64_t samples = 0;                    // per-particle records kept per width (0: none)
+  int bootstrap_replicates = 1000;
+  std::uint64_t seed = 1;
+  std::string output_path;
+  bool force = false;                          // overwrite an existing output
+  bool quiet = false;
+};
+
+/// One run directory as the filter uses it.
+struct RunPlan {
+  std::string path;
+  RunDirectory directory;
+  std::vector<std::string> files;              // snapshots used, time order
+  std::vector<double> times_s;
+  std::vector<std::int64_t> steps;
+  RunPhysics physics;
+  PeriodicGrid grid;
+};
+
+/// What will be done: the runs, the widths (m; the whole box is separate), the bins.
+struct FilterPlan {
+  std::vector<RunPlan> runs;
+  std::vector<double> widths_m;
+  double whole_box_width_m = 0;                // cube root of the (first run's) box volume
+  std::vector<double> bin_edges;
+  std::vector<std::string> warnings;
+  std::size_t snapshot_count() const;
+};
+
+/// Default widths: the multiples k of the cell size h (cube root of the cell volume) with
+/// 3 k h <= the shortest box edge of every run.
+std::vector<double> default_widths_m(const PeriodicGrid& grid, double shortest_edge_m);
+
+/// Reads the runs' headers and checks everything before any work: run directories, snapshots,
+/// fluid fields, physics that agree, widths between one cell and the shortest box edge, bins, the
+/// output path. InputError (exit 2) names the file or option, what was found and what is allowed.
+FilterPlan plan_filter(const FilterOptions& options);
+
+/// Per-snapshot sums of one (width, bin): count, sum N, sum M, sum s_y, sum phi_bar.
+struct BinSums {
+  double count = 0, numerator = 0, micro = 0, slip = 0, phi = 0;
+};
+
+/// A per-particle record (--samples).
+struct Sample {
+  std::uint64_t key = 0;                       // hash of (run, snapshot, id, width): the random choice
+  std::int64_t snapshot = 0, id = 0;
+  double phi = 0, numerator = 0, beta_micro = 0;
+  double slip[3] = {0, 0, 0}, grad_p_filtered[3] = {0, 0, 0};
+};
+
+/// The filtered sums of one snapshot: sums[w * n_bins + b] for the widths (w < widths.size()) and the
+/// whole box (w = widths.size()); particles with phi_bar outside the bins in out_of_range[w].
+struct SnapshotResult {
+  std::vector<BinSums> sums;
+  std::vector<std::int64_t> out_of_range;
+  std::vector<std::vector<Sample>> samples;    // per width (incl. whole box), at most options.samples
+  double seconds = 0;                          // wall time of the filtering (without reading)
+  std::int64_t particles = 0;
+};
+
+/// Filters one snapshot (already read) for every width of the plan.
+SnapshotResult filter_snapshot(const Snapshot& snapshot, const FilterPlan& plan, const FilterOptions& options,
+                               std::int64_t snapshot_row, std::size_t run_index);
+
+/// The whole job: snapshots distributed over the ranks of `comm`, statistics and the file on rank 0
+/// (written atomically). Collective. Returns the number of snapshots filtered.
+std::size_t run_filter(const FilterOptions& options, MPI_Comm comm);
+
+}  // namespace cgd::filter

@@ -1,0 +1,525 @@
+// run_filter: snapshots distributed over the ranks, per-snapshot sums reduced to rank 0, the block
+// bootstrap and the filtered file (docs/schema-filtered.md) written atomically by rank 0.
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstring>
+#include <filesystem>
+#include <iostream>
+#include <random>
+#include <sstream>
+
+#include "core/error.hpp"
+#include "core/h5.hpp"
+#include "core/output.hpp"
+#include "core/scene.hpp"
+#include "filter/filter.hpp"
+#include "filter/statistics.hpp"
+
+namespace cgd::filter {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+double now_s() {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
+}
+
+constexpr int kSumFields = 5;  // count, numerator, micro, slip, phi
+
+/// An error on some ranks only must end the job on all of them (no rank left waiting in a
+/// collective): every rank reports its status, and all throw the first failing rank's message.
+void agree_on_errors(MPI_Comm comm, int status, const std::string& message) {
+  int rank = 0;
+  MPI_Comm_rank(comm, &rank);
+  int first = status ? rank : 1 << 30;
+  MPI_Allreduce(MPI_IN_PLACE, &first, 1, MPI_INT, MPI_MIN, comm);
+  if (first == 1 << 30) return;
+  int kind = status;
+  int length = static_cast<int>(message.size());
+  MPI_Bcast(&kind, 1, MPI_INT, first, comm);
+  MPI_Bcast(&length, 1, MPI_INT, first, comm);
+  std::string text(static_cast<std::size_t>(length), '\0');
+  if (rank == first) text = message;
+  MPI_Bcast(text.data(), length, MPI_CHAR, first, comm);
+  if (kind == 2) throw InputError(text);
+  throw RunError(text);
+}
+
+struct Statistics {
+  std::vector<double> tau, n_eff_run;
+  std::vector<std::int64_t> block_len, block_of_row;
+  // per width (incl. whole box) and bin
+  std::vector<double> count, phi_mean, slip, drag, beta_bar, beta_micro, H, H_low, H_high, H_stderr, n_eff;
+  std::vector<std::int64_t> count_int;
+};
+
+Statistics compute_statistics(const FilterPlan& plan, const FilterOptions& o, const std::vector<double>& sums) {
+  const std::size_t n_widths = plan.widths_m.size() + 1, n_bins = plan.bin_edges.size() - 1;
+  const std::size_t per_row = n_widths * n_bins * kSumFields;
+  const std::size_t rows = sums.size() / per_row;
+  auto at = [&](std::size_t row, std::size_t w, std::size_t b, int field) {
+    return sums[row * per_row + (w * n_bins + b) * kSumFields + field];
+  };
+  Statistics st;
+  // 1. per run: autocorrelation of the whole-box slip (the domain slip), block length, blocks
+  std::vector<std::int64_t> run_of_block;
+  std::size_t row = 0;
+  for (std::size_t r = 0; r < plan.runs.size(); ++r) {
+    const std::size_t n = plan.runs[r].files.size();
+    std::vector<double> series;
+    for (std::size_t k = 0; k < n; ++k) {
+      double c = 0, s = 0;
+      for (std::size_t b = 0; b < n_bins; ++b) {
+        c += at(row + k, n_widths - 1, b, 0);
+        s += at(row + k, n_widths - 1, b, 3);
+      }
+      series.push_back(c > 0 ? s / c : 0.0);
+    }
+    const double tau = integrated_autocorrelation_time(series);
+    const std::int64_t b = block_length(tau, static_cast<std::int64_t>(n));
+    st.tau.push_back(tau);
+    st.block_len.push_back(b);
+    st.n_eff_run.push_back(static_cast<double>(n) / (2.0 * tau));
+    for (std::size_t k = 0; k < n; ++k) {
+      if (k % static_cast<std::size_t>(b) == 0) run_of_block.push_back(static_cast<std::int64_t>(r));
+      st.block_of_row.push_back(static_cast<std::int64_t>(run_of_block.size()) - 1);
+    }
+    row += n;
+  }
+  const std::size_t n_blocks = run_of_block.size();
+  // 2. totals and block sums of numerator and micro per (width, bin)
+  const std::size_t cells = n_widths * n_bins;
+  std::vector<double> total(cells * kSumFields, 0.0), block_num(n_blocks * cells, 0.0), block_mic(n_blocks * cells, 0.0);
+  std::vector<double> rows_with(cells * plan.runs.size(), 0.0);
+  std::vector<std::size_t> run_of_row;
+  for (std::size_t r = 0; r < plan.runs.size(); ++r) run_of_row.insert(run_of_row.end(), plan.runs[r].files.size(), r);
+  for (std::size_t k = 0; k < rows; ++k)
+    for (std::size_t c = 0; c < cells; ++c) {
+      const double* s = &sums[k * per_row + c * kSumFields];
+      for (int f = 0; f < kSumFields; ++f) total[c * kSumFields + f] += s[f];
+      const auto blk = static_cast<std::size_t>(st.block_of_row[k]);
+      block_num[blk * cells + c] += s[1];
+      block_mic[blk * cells + c] += s[2];
+      if (s[0] > 0) rows_with[c * plan.runs.size() + run_of_row[k]] += 1;
+    }
+  const double nan = std::nan("");
+  auto resize = [&](std::vector<double>& v) { v.assign(cells, nan); };
+  for (auto* v : {&st.count, &st.phi_mean, &st.slip, &st.drag, &st.beta_bar, &st.beta_micro, &st.H, &st.H_low,
+                  &st.H_high, &st.H_stderr, &st.n_eff})
+    resize(*v);
+  st.count_int.assign(cells, 0);
+  for (std::size_t c = 0; c < cells; ++c) {
+    const double* t = &total[c * kSumFields];
+    st.count[c] = t[0];
+    st.count_int[c] = static_cast<std::int64_t>(std::llround(t[0]));
+    if (!(t[0] > 0)) continue;
+    st.phi_mean[c] = t[4] / t[0];
+    st.slip[c] = t[3] / t[0];
+    st.drag[c] = t[1] / t[0];
+    st.beta_bar[c] = t[1] / t[3];
+    st.beta_micro[c] = t[2] / t[3];
+    st.H[c] = 1.0 - t[1] / t[2];
+    double ne = 0;
+    for (std::size_t r = 0; r < plan.runs.size(); ++r) ne += rows_with[c * plan.runs.size() + r] / (2.0 * st.tau[r]);
+    st.n_eff[c] = ne;
+  }
+  // 3. block bootstrap: every replicate resamples, within each run, as many blocks as the run has,
+  //    with replacement; the same resampled blocks serve every width and bin (one replicate = one
+  //    alternative history of the runs).
+  std::vector<std::vector<std::size_t>> blocks_of_run(plan.runs.size());
+  for (std::size_t b = 0; b < n_blocks; ++b) blocks_of_run[static_cast<std::size_t>(run_of_block[b])].push_back(b);
+  std::mt19937_64 rng(o.seed);
+  const int R = o.bootstrap_replicates;
+  std::vector<double> reps(static_cast<std::size_t>(R) * cells, nan);
+  std::vector<double> mult(n_blocks), num(cells), mic(cells);
+  for (int rep = 0; rep < R; ++rep) {
+    std::fill(mult.begin(), mult.end(), 0.0);
+    for (const auto& blocks : blocks_of_run) {
+      std::uniform_int_distribution<std::size_t> pick(0, blocks.size() - 1);
+      for (std::size_t k = 0; k < blocks.size(); ++k) mult[blocks[pick(rng)]] += 1;
+    }
+    std::fill(num.begin(), num.end(), 0.0);
+    std::fill(mic.begin(), mic.end(), 0.0);
+    for (std::size_t b = 0; b < n_blocks; ++b) {
+      if (mult[b] == 0) continue;
+      for (std::size_t c = 0; c < cells; ++c) {
+        num[c] += mult[b] * block_num[b * cells + c];
+        mic[c] += mult[b] * block_mic[b * cells + c];
+      }
+    }
+    for (std::size_t c = 0; c < cells; ++c)
+      if (mic[c] != 0) reps[c * static_cast<std::size_t>(R) + static_cast<std::size_t>(rep)] = 1.0 - num[c] / mic[c];
+  }
+  for (std::size_t c = 0; c < cells; ++c) {
+    if (!(st.count[c] > 0)) continue;
+    std::vector<double> v;
+    for (int rep = 0; rep < R; ++rep) {
+      const double x = reps[c * static_cast<std::size_t>(R) + static_cast<std::size_t>(rep)];
+      if (!std::isnan(x)) v.push_back(x);
+    }
+    if (v.size() < 2) continue;
+    double mean = 0, var = 0;
+    for (double x : v) mean += x;
+    mean /= static_cast<double>(v.size());
+    for (double x : v) var += (x - mean) * (x - mean);
+    st.H_stderr[c] = std::sqrt(var / static_cast<double>(v.size() - 1));
+    const double alpha = 0.5 * (1.0 - 0.95);
+    st.H_low[c] = percentile(v, alpha);
+    st.H_high[c] = percentile(v, 1.0 - alpha);
+  }
+  return st;
+}
+
+void write_filtered_file(const FilterPlan& plan, const FilterOptions& o, const std::vector<double>& sums,
+                         const std::vector<std::int64_t>& out_of_range, const std::vector<std::vector<Sample>>& samples,
+                         const Statistics& st, const std::vector<std::string>& checksums) {
+  const RunPlan& r0 = plan.runs.front();
+  const std::size_t n_widths = plan.widths_m.size() + 1, n_bins = plan.bin_edges.size() - 1;
+  const std::size_t rows = plan.snapshot_count();
+  const std::size_t per_row = n_widths * n_bins * kSumFields;
+  const std::uint64_t nb = n_bins;
+  const fs::path parent = fs::path(o.output_path).parent_path();
+  if (!parent.empty()) fs::create_directories(parent);
+  h5::write_atomically(o.output_path, MPI_COMM_SELF, [&](h5::File& f) {
+    // root attributes and /params: the first run's scene, as the engine wrote it
+    Scene scene;
+    bool scene_ok = false;
+    try {
+      scene = load_scene_from_string(r0.physics.scene_toml, r0.path + "/scene");
+      scene_ok = true;
+    } catch (const std::exception&) {
+    }
+    if (scene_ok) {
+      schema::write_common(f, "filtered", scene);
+    } else {
+      f.set_attr("/", "cgd_format", std::string("filtered"));
+      f.set_attr("/", "cgd_format_version", schema::kFormatVersion);
+      f.set_attr("/", "code_version", std::string(CGD_VERSION));
+      f.set_attr("/", "scene", r0.physics.scene_toml);
+    }
+    const RunPhysics& p = r0.physics;
+    f.set_attr("/", "micro_drag", p.drag);
+    f.set_attr("/", "u_t_m_s", p.u_t_m_s);
+    f.set_attr("/", "l_char_m", p.l_char_m);
+    f.set_attr("/", "diameter_m", p.diameter_m);
+    f.set_attr("/", "particle_density_kg_m3", p.particle_density_kg_m3);
+    f.set_attr("/", "fluid_density_kg_m3", p.fluid_density_kg_m3);
+    f.set_attr("/", "fluid_viscosity_Pa_s", p.fluid_viscosity_Pa_s);
+    f.set_attr("/", "parcel_size", p.parcel_size);
+    f.set_attr("/", "cell_size_m", std::vector<double>(r0.grid.spacing_m.begin(), r0.grid.spacing_m.end()));
+    f.set_attr("/", "pressure_terms", std::int64_t{p.pressure_gradient_force ? 1 : 0});
+    f.set_attr("/", "H_definition",
+               std::string("H = 1 - sum_i N_i / sum_i beta_micro(phi_bar_i, |u_slip_bar_i|) u_slip_bar_i,y over a bin; "
+                           "N_i = [-grad p_i + grad p_bar_i + beta_p,i (u_i - v_i)]_y; u_slip_bar_i = "
+                           "filter(eps u)/filter(eps) at x_i - v_i; box filter of edge width_m centred on the particle"));
+    f.set_attr("/", "bootstrap_replicates", static_cast<std::int64_t>(o.bootstrap_replicates));
+    f.set_attr("/", "bootstrap_seed", static_cast<std::int64_t>(o.seed));
+    f.set_attr("/", "confidence", 0.95);
+    f.set_attr("/", "bootstrap",
+               std::string("non-overlapping block bootstrap over snapshots, blocks resampled within each run; block "
+                           "length max(1, round(2 tau_int)) snapshots, tau_int of the run's domain slip series "
+                           "(Sokal window, c = 5); percentile interval"));
+    // runs
+    std::vector<std::string> paths;
+    std::vector<double> mean_phi, tau, neff;
+    std::vector<std::int64_t> counts, blen;
+    for (std::size_t r = 0; r < plan.runs.size(); ++r) {
+      paths.push_back(plan.runs[r].path);
+      mean_phi.push_back(plan.runs[r].physics.solids_fraction);
+      counts.push_back(static_cast<std::int64_t>(plan.runs[r].files.size()));
+      tau.push_back(st.tau[r]);
+      blen.push_back(st.block_len[r]);
+      neff.push_back(st.n_eff_run[r]);
+    }
+    const std::uint64_t nr = plan.runs.size();
+    f.create_group("/runs");
+    f.set_attr("/runs", "paths", paths);
+    f.write_replicated("/runs/mean_solids_fraction", mean_phi, {nr});
+    f.write_replicated("/runs/snapshot_count", counts, {nr});
+    f.write_replicated("/runs/block_length", blen, {nr});
+    f.write_replicated("/runs/tau_int", tau, {nr});
+    f.write_replicated("/runs/n_eff", neff, {nr});
+    // snapshots
+    std::vector<std::string> files;
+    std::vector<double> times;
+    std::vector<std::int64_t> run_index, steps;
+    for (std::size_t r = 0; r < plan.runs.size(); ++r)
+      for (std::size_t k = 0; k < plan.runs[r].files.size(); ++k) {
+        files.push_back(plan.runs[r].files[k]);
+        times.push_back(plan.runs[r].times_s[k]);
+        steps.push_back(plan.runs[r].steps[k]);
+        run_index.push_back(static_cast<std::int64_t>(r));
+      }
+    f.create_group("/snapshots");
+    f.set_attr("/snapshots", "files", files);
+    f.set_attr("/snapshots", "checksums", checksums);
+    f.set_attr("/snapshots", "checksum_kind", std::string("FNV-1a 64-bit of the file's bytes, hex"));
+    f.write_replicated("/snapshots/run_index", run_index, {rows});
+    f.write_replicated("/snapshots/time_s", times, {rows});
+    f.write_replicated("/snapshots/step", steps, {rows});
+    f.write_replicated("/snapshots/block", st.block_of_row, {rows});
+    // bins
+    f.create_group("/bins");
+    f.write_replicated("/bins/phi_edges", plan.bin_edges, {nb + 1});
+    f.set_attr("/bins", "width", plan.bin_edges[1] - plan.bin_edges[0]);
+    std::vector<double> centre(n_bins);
+    for (std::size_t b = 0; b < n_bins; ++b) centre[b] = 0.5 * (plan.bin_edges[b] + plan.bin_edges[b + 1]);
+    // widths
+    for (std::size_t w = 0; w < n_widths; ++w) {
+      const bool whole = w + 1 == n_widths;
+      const std::string g = whole ? "/whole_box" : "/width_" + std::to_string(w);
+      const double width = whole ? plan.whole_box_width_m : plan.widths_m[w];
+      f.create_group(g);
+      f.set_attr(g, "kind", std::string(whole ? "whole_box" : "box"));
+      f.set_attr(g, "width_m", width);
+      f.set_attr(g, "width_over_dp", width / p.diameter_m);
+      f.set_attr(g, "width_over_cell", width / r0.grid.cell_size_m());
+      f.set_attr(g, "F", p.l_char_m / width);
+      f.set_attr(g, "out_of_range", out_of_range[w]);
+      auto slice = [&](const std::vector<double>& v) {
+        return std::vector<double>(v.begin() + static_cast<std::ptrdiff_t>(w * n_bins),
+                                   v.begin() + static_cast<std::ptrdiff_t>((w + 1) * n_bins));
+      };
+      f.write_replicated(g + "/phi_center", centre, {nb});
+      f.write_replicated(g + "/count",
+                         std::vector<std::int64_t>(st.count_int.begin() + static_cast<std::ptrdiff_t>(w * n_bins),
+                                                   st.count_int.begin() + static_cast<std::ptrdiff_t>((w + 1) * n_bins)),
+                         {nb});
+      f.write_replicated(g + "/phi_mean", slice(st.phi_mean), {nb});
+      f.write_replicated(g + "/slip", slice(st.slip), {nb});
+      std::vector<double> slip_ut = slice(st.slip);
+      for (double& x : slip_ut) x /= p.u_t_m_s;
+      f.write_replicated(g + "/slip_over_ut", slip_ut, {nb});
+      f.write_replicated(g + "/drag", slice(st.drag), {nb});
+      f.write_replicated(g + "/beta_bar", slice(st.beta_bar), {nb});
+      f.write_replicated(g + "/beta_micro", slice(st.beta_micro), {nb});
+      f.write_replicated(g + "/H", slice(st.H), {nb});
+      f.write_replicated(g + "/H_low", slice(st.H_low), {nb});
+      f.write_replicated(g + "/H_high", slice(st.H_high), {nb});
+      f.write_replicated(g + "/H_stderr", slice(st.H_stderr), {nb});
+      f.write_replicated(g + "/n_eff", slice(st.n_eff), {nb});
+      // per-snapshot sums
+      const std::string ps = g + "/per_snapshot";
+      f.create_group(ps);
+      const char* names[kSumFields] = {"count", "numerator", "micro", "slip", "phi"};
+      for (int field = 0; field < kSumFields; ++field) {
+        std::vector<double> v(rows * n_bins);
+        for (std::size_t k = 0; k < rows; ++k)
+          for (std::size_t b = 0; b < n_bins; ++b) v[k * n_bins + b] = sums[k * per_row + (w * n_bins + b) * kSumFields + field];
+        if (field == 0) {
+          std::vector<std::int64_t> vi(v.size());
+          for (std::size_t i = 0; i < v.size(); ++i) vi[i] = static_cast<std::int64_t>(std::llround(v[i]));
+          f.write_replicated(ps + "/count", vi, {rows, nb});
+        } else {
+          f.write_replicated(ps + "/" + names[field], v, {rows, nb});
+        }
+      }
+      // samples
+      if (o.samples > 0) {
+        const std::vector<Sample>& s = samples[w];
+        const std::uint64_t ns = s.size();
+        std::vector<double> phi, num, bm, slip, gp;
+        std::vector<std::int64_t> snap, id;
+        for (const Sample& x : s) {
+          phi.push_back(x.phi);
+          num.push_back(x.numerator);
+          bm.push_back(x.beta_micro);
+          snap.push_back(x.snapshot);
+          id.push_back(x.id);
+          for (int d = 0; d < 3; ++d) {
+            slip.push_back(x.slip[d]);
+            gp.push_back(x.grad_p_filtered[d]);
+          }
+        }
+        const std::string sg = g + "/samples";
+        f.create_group(sg);
+        f.write_replicated(sg + "/phi", phi, {ns});
+        f.write_replicated(sg + "/slip", slip, {ns, 3});
+        f.write_replicated(sg + "/grad_p_filtered", gp, {ns, 3});
+        f.write_replicated(sg + "/numerator", num, {ns});
+        f.write_replicated(sg + "/beta_micro", bm, {ns});
+        f.write_replicated(sg + "/snapshot", snap, {ns});
+        f.write_replicated(sg + "/id", id, {ns});
+      }
+    }
+  });
+}
+
+}  // namespace
+
+std::size_t run_filter(const FilterOptions& o, MPI_Comm comm) {
+  int rank = 0, size = 1;
+  MPI_Comm_rank(comm, &rank);
+  MPI_Comm_size(comm, &size);
+  const double t_start = now_s();
+  FilterPlan plan;
+  {
+    int status = 0;
+    std::string message;
+    try {
+      plan = plan_filter(o);
+    } catch (const InputError& e) {
+      status = 2;
+      message = e.what();
+    } catch (const std::exception& e) {
+      status = 1;
+      message = e.what();
+    }
+    agree_on_errors(comm, status, message);
+  }
+  const std::size_t n_widths = plan.widths_m.size() + 1, n_bins = plan.bin_edges.size() - 1;
+  const std::size_t rows = plan.snapshot_count();
+  const double d = plan.runs.front().physics.diameter_m;
+  if (rank == 0 && !o.quiet) {
+    for (const std::string& w : plan.warnings) std::cerr << "warning: " << w << "\n";
+    std::cerr << "cgd-filter: " << plan.runs.size() << " run(s), " << rows << " snapshot(s), " << size << " rank(s); widths (d_p):";
+    for (double w : plan.widths_m) std::cerr << " " << w / d;
+    std::cerr << " + whole box (" << plan.whole_box_width_m / d << "); " << n_bins << " bins of " << plan.bin_edges[1]
+              << " in phi_bar\n";
+  }
+  // snapshot rows in run order; row k is filtered by rank k % size
+  std::vector<std::pair<std::size_t, std::size_t>> row_of;  // (run, index in run)
+  for (std::size_t r = 0; r < plan.runs.size(); ++r)
+    for (std::size_t k = 0; k < plan.runs[r].files.size(); ++k) row_of.emplace_back(r, k);
+  const std::size_t per_row = n_widths * n_bins * kSumFields;
+  std::vector<double> sums(rows * per_row, 0.0);
+  std::vector<std::int64_t> out_of_range(n_widths, 0);
+  std::vector<std::vector<Sample>> samples(n_widths);
+  std::vector<std::string> checksums(rows);
+  double read_s = 0, filter_s = 0;
+  std::int64_t particle_widths = 0;
+  {
+    int status = 0;
+    std::string message;
+    try {
+      std::size_t done = 0, mine = 0;
+      for (std::size_t k = static_cast<std::size_t>(rank); k < rows; k += static_cast<std::size_t>(size)) ++mine;
+      double last_print = now_s();
+      for (std::size_t k = static_cast<std::size_t>(rank); k < rows; k += static_cast<std::size_t>(size)) {
+        const auto [r, i] = row_of[k];
+        const double t0 = now_s();
+        const Snapshot snap = read_snapshot(plan.runs[r].files[i]);
+        checksums[k] = file_checksum(plan.runs[r].files[i]);
+        read_s += now_s() - t0;
+        SnapshotResult res = filter_snapshot(snap, plan, o, static_cast<std::int64_t>(k), r);
+        filter_s += res.seconds;
+        particle_widths += res.particles * static_cast<std::int64_t>(n_widths - 1);
+        for (std::size_t c = 0; c < n_widths * n_bins; ++c) {
+          double* s = &sums[k * per_row + c * kSumFields];
+          s[0] = res.sums[c].count;
+          s[1] = res.sums[c].numerator;
+          s[2] = res.sums[c].micro;
+          s[3] = res.sums[c].slip;
+          s[4] = res.sums[c].phi;
+        }
+        for (std::size_t w = 0; w < n_widths; ++w) {
+          out_of_range[w] += res.out_of_range[w];
+          samples[w].insert(samples[w].end(), res.samples[w].begin(), res.samples[w].end());
+          if (o.samples > 0 && static_cast<std::int64_t>(samples[w].size()) > o.samples) {
+            std::sort(samples[w].begin(), samples[w].end(), [](const Sample& a, const Sample& b) { return a.key < b.key; });
+            samples[w].resize(static_cast<std::size_t>(o.samples));
+          }
+        }
+        ++done;
+        const double t = now_s();
+        if (rank == 0 && !o.quiet && (t - last_print > 2.0 || done == mine)) {
+          const double per = (t - t_start) / static_cast<double>(done);
+          std::cerr << "cgd-filter: " << done << "/" << mine << " snapshots of rank 0 (" << plan.runs[r].path << ", t = "
+                    << plan.runs[r].times_s[i] << " s), " << per << " s each, ETA "
+                    << per * static_cast<double>(mine - done) << " s\n";
+          last_print = t;
+        }
+      }
+    } catch (const InputError& e) {
+      status = 2;
+      message = e.what();
+    } catch (const std::exception& e) {
+      status = 1;
+      message = e.what();
+    }
+    agree_on_errors(comm, status, message);
+  }
+  // Every snapshot's slot is filled by exactly one rank and zero elsewhere: the sum is exact.
+  MPI_Allreduce(MPI_IN_PLACE, sums.data(), static_cast<int>(sums.size()), MPI_DOUBLE, MPI_SUM, comm);
+  MPI_Allreduce(MPI_IN_PLACE, out_of_range.data(), static_cast<int>(n_widths), MPI_INT64_T, MPI_SUM, comm);
+  // checksums and samples to rank 0
+  {
+    std::string mine;
+    for (std::size_t k = 0; k < rows; ++k) mine += checksums[k] + "\n";
+    std::vector<char> all(mine.size() * static_cast<std::size_t>(size));
+    MPI_Gather(mine.data(), static_cast<int>(mine.size()), MPI_CHAR, all.data(), static_cast<int>(mine.size()), MPI_CHAR, 0, comm);
+    if (rank == 0) {
+      for (int q = 0; q < size; ++q) {
+        std::istringstream in(std::string(all.data() + mine.size() * static_cast<std::size_t>(q), mine.size()));
+        std::string line;
+        for (std::size_t k = 0; k < rows && std::getline(in, line); ++k)
+          if (!line.empty()) checksums[k] = line;
+      }
+    }
+  }
+  if (o.samples > 0) {
+    for (std::size_t w = 0; w < n_widths; ++w) {
+      const int bytes = static_cast<int>(samples[w].size() * sizeof(Sample));
+      std::vector<int> counts(static_cast<std::size_t>(size)), displs(static_cast<std::size_t>(size));
+      MPI_Gather(&bytes, 1, MPI_INT, counts.data(), 1, MPI_INT, 0, comm);
+      int total = 0;
+      for (int q = 0; q < size; ++q) {
+        displs[static_cast<std::size_t>(q)] = total;
+        total += counts[static_cast<std::size_t>(q)];
+      }
+      std::vector<Sample> all(rank == 0 ? static_cast<std::size_t>(total) / sizeof(Sample) : 0);
+      MPI_Gatherv(samples[w].data(), bytes, MPI_BYTE, all.data(), counts.data(), displs.data(), MPI_BYTE, 0, comm);
+      if (rank == 0) {
+        std::sort(all.begin(), all.end(), [](const Sample& a, const Sample& b) { return a.key < b.key; });
+        if (static_cast<std::int64_t>(all.size()) > o.samples) all.resize(static_cast<std::size_t>(o.samples));
+        samples[w] = std::move(all);
+      }
+    }
+  }
+  double times[2] = {read_s, filter_s};
+  MPI_Allreduce(MPI_IN_PLACE, times, 2, MPI_DOUBLE, MPI_SUM, comm);
+  MPI_Allreduce(MPI_IN_PLACE, &particle_widths, 1, MPI_INT64_T, MPI_SUM, comm);
+  {
+    int status = 0;
+    std::string message;
+    if (rank == 0) {
+      try {
+        const double t0 = now_s();
+        const Statistics st = compute_statistics(plan, o, sums);
+        write_filtered_file(plan, o, sums, out_of_range, samples, st, checksums);
+        if (!o.quiet) {
+          const RunPhysics& p = plan.runs.front().physics;
+          std::cerr << "cgd-filter: wrote " << o.output_path << " in " << now_s() - t_start << " s (reading "
+                    << times[0] << " s, filtering " << times[1] << " s = "
+                    << (times[1] > 0 ? static_cast<double>(particle_widths) / times[1] : 0.0)
+                    << " particle-widths/s/core, statistics and writing " << now_s() - t0 << " s)\n";
+          for (std::size_t r = 0; r < plan.runs.size(); ++r)
+            std::cerr << "  run " << plan.runs[r].path << ": " << plan.runs[r].files.size() << " snapshots, tau_int "
+                      << st.tau[r] << " snapshots, block length " << st.block_len[r] << ", n_eff " << st.n_eff_run[r]
+                      << "\n";
+          // the whole box: the domain slip
+          double c = 0, s = 0;
+          for (std::size_t b = 0; b < n_bins; ++b) {
+            c += st.count[(n_widths - 1) * n_bins + b] > 0 ? st.count[(n_widths - 1) * n_bins + b] : 0;
+            s += st.count[(n_widths - 1) * n_bins + b] > 0
+                     ? st.slip[(n_widths - 1) * n_bins + b] * st.count[(n_widths - 1) * n_bins + b]
+                     : 0;
+          }
+          std::cerr << "  whole box: mean slip " << (c > 0 ? s / c / p.u_t_m_s : 0.0) << " u_t\n";
+        }
+      } catch (const InputError& e) {
+        status = 2;
+        message = e.what();
+      } catch (const std::exception& e) {
+        status = 1;
+        message = std::string("writing ") + o.output_path + ": " + e.what();
+      }
+    }
+    agree_on_errors(comm, status, message);
+  }
+  return rows;
+}
+
+}  // namespace cgd::filter
