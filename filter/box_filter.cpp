@@ -101,13 +101,18 @@ std::array<double, K> SummedVolumeTable<K>::integral_slope(const std::array<Axis
 
 template class SummedVolumeTable<1>;
 template class SummedVolumeTable<4>;
+template class SummedVolumeTable<5>;
 
 namespace {
-std::vector<double> interleave_flow(const std::vector<double>& eps, const std::vector<double>& eps_u) {
-  std::vector<double> out(4 * eps.size());
+std::vector<double> interleave(const std::vector<double>& eps, const std::vector<double>& eps_u,
+                               const std::vector<double>& p) {
+  if (eps_u.size() != 3 * eps.size() || p.size() != eps.size())
+    throw std::invalid_argument("PeriodicBoxFilter: fields of different sizes");
+  std::vector<double> out(5 * eps.size());
   for (std::size_t c = 0; c < eps.size(); ++c) {
-    out[4 * c] = eps[c];
-    for (int d = 0; d < 3; ++d) out[4 * c + 1 + d] = eps_u[3 * c + d];
+    out[5 * c] = eps[c];
+    for (int d = 0; d < 3; ++d) out[5 * c + 1 + d] = eps_u[3 * c + d];
+    out[5 * c + 4] = p[c];
   }
   return out;
 }
@@ -120,30 +125,51 @@ PeriodicBoxFilter::PeriodicBoxFilter(const PeriodicGrid& grid, const std::vector
                                      const std::vector<double>& eps_velocity, const std::vector<double>& pressure,
                                      double max_width_m)
     : grid_(grid),
-      flow_(grid, interleave_flow(void_fraction, eps_velocity).data(), width_in_cells(grid, max_width_m)),
-      pressure_(grid, pressure.data(), width_in_cells(grid, max_width_m)) {}
+      table_(grid, interleave(void_fraction, eps_velocity, pressure).data(), width_in_cells(grid, max_width_m)) {}
 
 FilteredPoint PeriodicBoxFilter::at(const double* position_m, double width_m) const {
   std::array<AxisOperator, 3> op;
-  double volume_cells = 1.0;
-  for (int a = 0; a < 3; ++a) {
-    const double w = width_m / grid_.spacing_m[a];
-    op[a] = axis_operator(grid_.wrapped_cell_coordinate(position_m[a], a), w, grid_.cells[a]);
-    volume_cells *= w;
-  }
-  const std::array<double, 4> flow = flow_.integral(op);
+  for (int a = 0; a < 3; ++a)
+    op[a] = axis_operator(grid_.wrapped_cell_coordinate(position_m[a], a), width_m / grid_.spacing_m[a], grid_.cells[a]);
+  const int ix[4] = {op[0].lo, op[0].lo + 1, op[0].hi, op[0].hi + 1};
+  const int iy[4] = {op[1].lo, op[1].lo + 1, op[1].hi, op[1].hi + 1};
+  const int iz[4] = {op[2].lo, op[2].lo + 1, op[2].hi, op[2].hi + 1};
+  const auto &vx = op[0].value, &vy = op[1].value, &vz = op[2].value;
+  const auto &sx = op[0].slope, &sy = op[1].slope, &sz = op[2].slope;
+  double flow[4] = {0, 0, 0, 0}, slope[3] = {0, 0, 0};
+  for (int r = 0; r < 4; ++r)
+    for (int q = 0; q < 4; ++q) {
+      const double vyz = vy[q] * vz[r], syz = sy[q] * vz[r], ysz = vy[q] * sz[r];
+      const double* row = table_.point(0, iy[q], iz[r]);
+      for (int p = 0; p < 4; ++p) {
+        const double* t = row + 5 * static_cast<std::ptrdiff_t>(ix[p]);
+        const double w = vx[p] * vyz;
+        flow[0] += w * t[0];
+        flow[1] += w * t[1];
+        flow[2] += w * t[2];
+        flow[3] += w * t[3];
+        slope[0] += sx[p] * vyz * t[4];
+        slope[1] += vx[p] * syz * t[4];
+        slope[2] += vx[p] * ysz * t[4];
+      }
+    }
+  // the removed means, integrated over the box exactly: mean x box volume in cells
+  const double volume_cells = (op[0].hi - op[0].lo + vx[1] + vx[3]) * (op[1].hi - op[1].lo + vy[1] + vy[3]) *
+                              (op[2].hi - op[2].lo + vz[1] + vz[3]);
+  const auto& mean = table_.mean();
+  for (int c = 0; c < 4; ++c) flow[c] += mean[c] * volume_cells;
   FilteredPoint f;
   f.void_fraction = flow[0] / volume_cells;
   for (int d = 0; d < 3; ++d) f.velocity[d] = flow[1 + d] / flow[0];
-  for (int a = 0; a < 3; ++a)
-    f.grad_p[a] = pressure_.integral_slope(op, a)[0] / (volume_cells * grid_.spacing_m[a]);
+  for (int a = 0; a < 3; ++a) f.grad_p[a] = slope[a] / (volume_cells * grid_.spacing_m[a]);
   return f;
 }
 
 FilteredPoint PeriodicBoxFilter::domain_average() const {
   FilteredPoint f;
-  f.void_fraction = flow_.mean()[0];
-  for (int d = 0; d < 3; ++d) f.velocity[d] = flow_.mean()[1 + d] / flow_.mean()[0];
+  const auto& mean = table_.mean();
+  f.void_fraction = mean[0];
+  for (int d = 0; d < 3; ++d) f.velocity[d] = mean[1 + d] / mean[0];
   return f;
 }
 

@@ -50,6 +50,8 @@ class SummedVolumeTable {
   std::array<double, K> integral_slope(const std::array<AxisOperator, 3>& op, int axis) const;
   /// Mean of each field over the grid.
   const std::array<double, K>& mean() const { return mean_; }
+  /// The K values at table point (i, j, k) (the cumulative integral minus the means' part).
+  const double* point(int i, int j, int k) const { return &table_[at(i, j, k)]; }
   std::size_t bytes() const { return table_.size() * sizeof(double); }
 
  private:
@@ -85,12 +87,13 @@ class PeriodicBoxFilter {
   FilteredPoint at(const double* position_m, double width_m) const;
   /// The whole-box average: <eps>, <eps u>/<eps>, zero gradient.
   FilteredPoint domain_average() const;
-  std::size_t bytes() const { return flow_.bytes() + pressure_.bytes(); }
+  std::size_t bytes() const { return table_.bytes(); }
 
  private:
   PeriodicGrid grid_;
-  SummedVolumeTable<4> flow_;      // eps, eps u_x, eps u_y, eps u_z
-  SummedVolumeTable<1> pressure_;  // p
+  // eps, eps u_x, eps u_y, eps u_z, p interleaved: one pass over the 64 table points gives the five box
+  // integrals and the three slopes of the pressure's (40 contiguous bytes per point: few cache misses)
+  SummedVolumeTable<5> table_;
 };
 
 }  // namespace cgd::filter

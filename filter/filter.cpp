@@ -199,8 +199,19 @@ SnapshotResult filter_snapshot(const Snapshot& s, const FilterPlan& plan, const 
   auto by_key = [](const Sample& a, const Sample& b) { return a.key < b.key; };
   std::vector<std::priority_queue<Sample, std::vector<Sample>, decltype(by_key)>> heaps(n_widths, decltype(heaps)::value_type(by_key));
 
+  // particles in cell order, so that neighbours in the loop read neighbouring table points (the order
+  // is a function of the snapshot alone: results do not depend on how snapshots go to ranks)
+  std::vector<std::pair<std::size_t, std::int64_t>> order(static_cast<std::size_t>(s.count));
+  for (std::int64_t i = 0; i < s.count; ++i) {
+    int c[3];
+    for (int a = 0; a < 3; ++a)
+      c[a] = std::min(s.grid.cells[a] - 1, static_cast<int>(s.grid.wrapped_cell_coordinate(s.position[3 * i + a], a)));
+    order[static_cast<std::size_t>(i)] = {s.grid.index(c[0], c[1], c[2]), i};
+  }
+  std::sort(order.begin(), order.end());
+
   visit_drag_law(micro_law(run), drag_params(run.physics), [&](const auto& law) {
-    for (std::int64_t i = 0; i < s.count; ++i) {
+    for (const auto& [cell, i] : order) {
       const double* x = &s.position[3 * i];
       const double* v = &s.velocity[3 * i];
       const double* u = &s.fluid_velocity[3 * i];
