@@ -322,3 +322,100 @@ TEST(FilterStatistics, AutocorrelationTimeOfWhiteNoiseAndOfAnAR1Process) {
 
 }  // namespace
 }  // namespace cgd::filter
+
+namespace cgd::filter {
+namespace {
+
+TEST(Filter, ClusterColumnGivesHThatGrowsWithTheWidthAndTheFullPeriodValue) {
+  // A known "cluster": along x, a quarter of the period is dense (phi = 0.3, slow gas u_y = 0.05 m/s,
+  // particles falling at -0.15 m/s), the rest dilute (phi = 0.02, gas 0.4 m/s, particles -0.05 m/s);
+  // uniform in y and z, uniform pressure, the resolved drag the micro law of each cell. The gas bypasses
+  // the cluster, so a box reaching past the cluster's edge sees a faster gas: the filtered slip of the
+  // cluster's particles exceeds their resolved slip and H > 0 in the dense bins, growing with the box.
+  // A box as wide as the period sees the domain average: H there is computed here from the sums.
+  const int n = 16;
+  const double d = 75e-6, h = 2.5e-4;
+  Snapshot s;
+  s.has_fluid = true;
+  s.grid.cells = {n, 4, 4};
+  s.grid.spacing_m = {h, h, h};
+  s.physics.diameter_m = d;
+  s.physics.fluid_density_kg_m3 = 1.3;
+  s.physics.fluid_viscosity_Pa_s = 1.8e-5;
+  s.physics.drag = "beetstra";
+  s.physics.pressure_gradient_force = true;
+  const BeetstraDrag law(1.3, 1.8e-5, d);
+  auto dense = [&](int i) { return i < n / 4; };
+  for (std::size_t c = 0; c < s.grid.cell_count(); ++c) {
+    const int i = static_cast<int>(c % n);
+    const double eps = dense(i) ? 0.7 : 0.98, u = dense(i) ? 0.05 : 0.4;
+    s.void_fraction.push_back(eps);
+    s.eps_velocity.insert(s.eps_velocity.end(), {0.0, eps * u, 0.0});
+    s.pressure.push_back(0.0);
+  }
+  for (int k = 0; k < 4; ++k)
+    for (int j = 0; j < 4; ++j)
+      for (int i = 0; i < n; ++i) {
+        const int per_cell = dense(i) ? 15 : 1;  // particles in proportion to phi
+        for (int q = 0; q < per_cell; ++q) {
+          const double x[3] = {(i + 0.5) * h, (j + 0.5) * h, (k + 0.5) * h};
+          const double u = dense(i) ? 0.05 : 0.4, v = dense(i) ? -0.15 : -0.05;
+          s.position.insert(s.position.end(), x, x + 3);
+          s.velocity.insert(s.velocity.end(), {0.0, v, 0.0});
+          s.fluid_velocity.insert(s.fluid_velocity.end(), {0.0, u, 0.0});
+          s.pressure_gradient.insert(s.pressure_gradient.end(), {0.0, 0.0, 0.0});
+          s.drag_coefficient.push_back(law.beta_p(dense(i) ? 0.3 : 0.02, u - v));
+          s.id.push_back(s.count++);
+        }
+      }
+  FilterPlan plan;
+  RunPlan run;
+  run.physics = s.physics;
+  run.grid = s.grid;
+  plan.runs.push_back(run);
+  plan.widths_m = {h, 2 * h, 3 * h, 4 * h, 6 * h, n * h};
+  plan.whole_box_width_m = n * h;
+  for (int b = 0; b <= 100; ++b) plan.bin_edges.push_back(0.01 * b);
+  const SnapshotResult res = filter_snapshot(s, plan, FilterOptions{}, 0, 0);
+  const std::size_t n_bins = 100;
+  // H of the particles that sit in the cluster's cells: their bins are those with phi_bar >= 0.1
+  auto dense_H = [&](std::size_t w) {
+    double num = 0, mic = 0;
+    for (std::size_t b = 10; b < n_bins; ++b) {
+      num += res.sums[w * n_bins + b].numerator;
+      mic += res.sums[w * n_bins + b].micro;
+    }
+    return 1.0 - num / mic;
+  };
+  EXPECT_NEAR(dense_H(0), 0.0, 1e-12);  // one cell: the resolved field itself
+  double previous = dense_H(0);
+  for (std::size_t w = 1; w < 5; ++w) {
+    EXPECT_GT(dense_H(w), previous + 0.01) << "width " << w;
+    previous = dense_H(w);
+  }
+  // the full period: every particle sees phi_bar = <phi> and the Favre mean gas velocity
+  double eps_sum = 0, epsu_sum = 0;
+  for (std::size_t c = 0; c < s.grid.cell_count(); ++c) {
+    eps_sum += s.void_fraction[c];
+    epsu_sum += s.eps_velocity[3 * c + 1];
+  }
+  const double phi_mean = 1 - eps_sum / static_cast<double>(s.grid.cell_count()), u_mean = epsu_sum / eps_sum;
+  double num = 0, mic = 0;
+  for (std::int64_t i = 0; i < s.count; ++i) {
+    const double slip = u_mean - s.velocity[3 * i + 1];
+    num += s.drag_coefficient[i] * (s.fluid_velocity[3 * i + 1] - s.velocity[3 * i + 1]);
+    mic += law.beta_p(phi_mean, std::abs(slip)) * slip;
+  }
+  for (std::size_t w : {std::size_t{5}, std::size_t{6}}) {  // the period-wide box and the whole box
+    double n_w = 0, m_w = 0;
+    for (std::size_t b = 0; b < n_bins; ++b) {
+      n_w += res.sums[w * n_bins + b].numerator;
+      m_w += res.sums[w * n_bins + b].micro;
+    }
+    EXPECT_NEAR(1.0 - n_w / m_w, 1.0 - num / mic, 1e-12) << "width " << w;
+  }
+  EXPECT_GT(1.0 - num / mic, 0.05);  // clustering lowers the drag a coarse observer sees (0.105 here)
+}
+
+}  // namespace
+}  // namespace cgd::filter

@@ -1,0 +1,105 @@
+#!/usr/bin/python3
+"""Draw a filtered file of cgd-filter (cgd_format = "filtered"): the filtered drag correction
+H = 1 - beta_bar/beta_micro against the filtered solids fraction, one curve per filter width with its
+95 % block-bootstrap band (the shape of Radl & Sundaresan's Figure 1), beside the published Radl 2014
+correction h(phi)/(1 + a(phi) F) at the same F (dashed). Also prints the table behind the picture.
+
+usage: /usr/bin/python3 tools/plot_filtered.py FILTERED.h5 [-o H.png] [--min-count N] [--table-phi 0.02,0.05,...]
+(Debian's h5py/matplotlib belong to /usr/bin/python3.)"""
+import argparse
+import os
+import sys
+
+import h5py
+import numpy as np
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+RADL_CSV = os.path.join(HERE, "..", "data", "reference", "radl2014-filtered-drag.csv")
+
+
+def radl2014(phi, F, csv=RADL_CSV):
+    """Published Radl & Sundaresan (2014) correction H = h(phi) / (1 + a(phi) F), piecewise cubics of
+    data/reference/radl2014-filtered-drag.csv (c1 = -8.82 of MFiX on a(0.25..0.40); see the file)."""
+    rows = [l.strip().split(",") for l in open(csv) if l.strip() and not l.startswith("#")][1:]
+    pieces = {"a": [], "h": []}
+    for r in rows:
+        pieces[r[0]].append([float(x) for x in r[1:]])
+
+    def ev(name, x):
+        for lo, hi, x0, c0, c1, c2, c3 in pieces[name]:
+            if lo <= x < hi:
+                t = x - x0
+                return c0 + c1 * t + c2 * t * t + c3 * t ** 3
+        return 0.0
+
+    phi = np.atleast_1d(phi)
+    return np.array([ev("h", p) / (1.0 + ev("a", p) * F) for p in phi])
+
+
+def widths(f):
+    names = sorted([k for k in f if k.startswith("width_")], key=lambda k: f[k].attrs["width_m"])
+    return names + (["whole_box"] if "whole_box" in f else [])
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("file")
+    ap.add_argument("-o", "--output", default=None, help="PNG to write (default: FILE with .png)")
+    ap.add_argument("--min-count", type=int, default=200, help="bins with fewer samples are not drawn (default 200)")
+    ap.add_argument("--table-phi", default="0.02,0.05,0.08,0.1,0.15,0.2", help="phi_bar values of the printed table")
+    a = ap.parse_args()
+    try:
+        f = h5py.File(a.file, "r")
+    except OSError as e:
+        sys.exit(f"plot_filtered: {a.file}: cannot open ({e})")
+    if f.attrs.get("cgd_format") != "filtered":
+        sys.exit(f"plot_filtered: {a.file}: cgd_format is {f.attrs.get('cgd_format')!r}, expected 'filtered'")
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    dp = f.attrs["diameter_m"]
+    fig, ax = plt.subplots(figsize=(7.5, 5))
+    colors = plt.rcParams["axes.prop_cycle"].by_key()["color"]
+    table_phi = [float(x) for x in a.table_phi.split(",")]
+    print(f"{a.file}: H = 1 - beta_bar/beta_micro ({f.attrs['micro_drag']}), 95 % block-bootstrap intervals; "
+          f"Radl 2014 = h/(1 + a F) at the same F")
+    print(f"{'width/d_p':>9} {'F':>6} " + " ".join(f"{'phi=' + str(p):>26}" for p in table_phi))
+    for n, g in enumerate(widths(f)):
+        G = f[g]
+        c = G["count"][:]
+        m = c >= a.min_count
+        phi = G["phi_mean"][:]
+        H, lo, hi = G["H"][:], G["H_low"][:], G["H_high"][:]
+        F = G.attrs["F"]
+        label = ("whole box" if g == "whole_box" else f"Δ = {G.attrs['width_over_dp']:.1f} d_p") + f" (F = {F:.2f})"
+        col = colors[n % len(colors)]
+        if g == "whole_box":
+            ax.errorbar(phi[m], H[m], yerr=[H[m] - lo[m], hi[m] - H[m]], fmt="s", color=col, label=label)
+        else:
+            ax.plot(phi[m], H[m], "o-", ms=3, color=col, label=label)
+            ax.fill_between(phi[m], lo[m], hi[m], color=col, alpha=0.25, lw=0)
+            grid = np.linspace(0.0, max(0.3, phi[m].max() if m.any() else 0.3), 200)
+            ax.plot(grid, radl2014(grid, F), "--", color=col, lw=1)
+        cells = []
+        centers = G["phi_center"][:]
+        for p in table_phi:
+            b = min(int(np.floor(p / f["bins"].attrs["width"])), len(centers) - 1)
+            if c[b] >= a.min_count:
+                cells.append(f"{H[b]:6.3f} [{lo[b]:6.3f},{hi[b]:6.3f}] R{radl2014(p, F)[0]:5.2f}")
+            else:
+                cells.append(f"{'-':>26}")
+        print(f"{G.attrs['width_over_dp']:9.2f} {F:6.3f} " + " ".join(cells))
+    ax.axhline(0, color="k", lw=0.5)
+    ax.set_xlabel("filtered solids fraction φ̄")
+    ax.set_ylabel("H = 1 − β̄ / β_micro")
+    ax.set_title(f"{os.path.basename(a.file)}: filtered drag correction (dashed: Radl 2014 at the same F)", fontsize=9)
+    ax.legend(fontsize=8)
+    out = a.output or os.path.splitext(a.file)[0] + ".png"
+    fig.tight_layout()
+    fig.savefig(out, dpi=120)
+    print(f"wrote {out}")
+
+
+if __name__ == "__main__":
+    main()
