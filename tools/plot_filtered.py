@@ -81,6 +81,11 @@ def main():
             ax.fill_between(phi[m], lo[m], hi[m], color=col, alpha=0.25, lw=0)
             grid = np.linspace(0.0, max(0.3, phi[m].max() if m.any() else 0.3), 200)
             ax.plot(grid, radl2014(grid, F), "--", color=col, lw=1)
+        if g == "whole_box":
+            for b in np.nonzero(c > 0)[0]:
+                print(f"{'whole box':>9} {F:6.3f}  phi_bar = {phi[b]:.4f}: H = {H[b]:.3f} [{lo[b]:.3f},{hi[b]:.3f}], "
+                      f"slip {G['slip_over_ut'][b]:.3f} u_t; Radl 2014 {radl2014(phi[b], F)[0]:.2f}")
+            continue
         cells = []
         centers = G["phi_center"][:]
         for p in table_phi:
