@@ -1,0 +1,32 @@
+#!/usr/bin/env bash
+# One simulation stage of Makefile.pipeline: run `COMMAND... -o RUN_DIR` so that make can trust RUN_DIR/DONE.
+# usage: scripts/pipeline_run.sh LABEL RUN_DIR PARAMS -- COMMAND...
+#   PARAMS: the text that defines the run (scene, --set overrides); kept in RUN_DIR.params.
+# If RUN_DIR holds an unfinished run of the same PARAMS with a checkpoint (a killed or failed make), it is
+# continued with --restart: nothing already computed is lost. Otherwise (new parameters, or no checkpoint)
+# RUN_DIR is removed and the run starts afresh. One progress line at the start and one at the end.
+set -uo pipefail
+label=$1 dir=$2 params=$3
+shift 3
+[ "${1:-}" = "--" ] && shift
+say() { echo "[pipeline] $label: $*" >&2; }
+start=$(date +%s)
+restart=()
+if [ -d "$dir" ] && [ -f "$dir.params" ] && [ "$(cat "$dir.params")" = "$params" ] && [ -f "$dir/checkpoint.h5" ] &&
+   [ ! -f "$dir/DONE" ]; then
+  restart=(--restart)
+  say "continuing the unfinished run in $dir from its checkpoint"
+else
+  rm -rf "$dir" "$dir.params"
+  say "running -> $dir"
+fi
+mkdir -p "$(dirname "$dir")"
+printf '%s\n' "$params" >"$dir.params"
+"$@" -o "$dir" "${restart[@]}" --quiet >"$dir.log" 2>&1
+status=$?
+if [ $status -ne 0 ] || [ ! -f "$dir/DONE" ]; then
+  say "FAILED (exit status $status); its log: $dir.log"
+  tail -n 15 "$dir.log" >&2
+  exit 1
+fi
+say "done in $(( $(date +%s) - start )) s"
