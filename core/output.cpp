@@ -97,6 +97,7 @@ void write_params(h5::File& f, const Scene& s) {
   f.set_attr(g, "dump_interval_s", r.dump_interval_s);
   f.set_attr(g, "series_interval_s", r.series_interval_s);
   f.set_attr(g, "checkpoint_wall_s", r.checkpoint_wall_s);
+  f.set_attr(g, "sampling_start_s", r.sampling_start_s);
   if (r.dt_s) f.set_attr(g, "dt_s", *r.dt_s);
 
   // derived scales

@@ -125,6 +125,8 @@ const std::vector<SectionSpec>& schema() {
         {"series_interval", Kind::Number, "s between time-series rows"},
         {"series_interval_tref", Kind::Number, "time-series interval in units of t_ref = u_t/g"},
         {"checkpoint_wall_s", Kind::Number, "wall-clock seconds between checkpoints"},
+        {"sampling_start", Kind::Number, "s, start of the window of time averages (after the transient)"},
+        {"sampling_start_tref", Kind::Number, "start of the window of time averages in units of t_ref = u_t/g"},
         {"dt", Kind::Number, "s, explicit DEM time step"}}},
   };
   return sections;
@@ -722,7 +724,7 @@ Scene build_scene(const SceneReader& in) {
 
   // [run]
   RunConfig& r = s.run;
-  for (const char* key : {"end_time_tref", "dump_interval_tref", "series_interval_tref"})
+  for (const char* key : {"end_time_tref", "dump_interval_tref", "series_interval_tref", "sampling_start_tref"})
     if (in.has("run", key) && !s.fluid)
       in.fail_value("run", key,
                     "needs a [fluid] section: t_ref = u_t/g is undefined without a fluid; give run." +
@@ -750,7 +752,7 @@ Scene build_scene(const SceneReader& in) {
       x.l_char_m = x.l_ref_m * std::pow(x.fr_p, -2.0 / 3.0);
       x.t_ref_s = x.u_t_m_s / g;
     } else {
-      for (const char* key : {"end_time_tref", "dump_interval_tref", "series_interval_tref"})
+      for (const char* key : {"end_time_tref", "dump_interval_tref", "series_interval_tref", "sampling_start_tref"})
         if (in.has("run", key))
           in.fail_value("run", key,
                         "needs gravity: t_ref = u_t/g is undefined when domain.gravity = [0, 0, 0]");
@@ -780,6 +782,8 @@ Scene build_scene(const SceneReader& in) {
                   "must be > 0 (simulated time)");
   r.dump_interval_s = time_key("dump_interval", "dump_interval_tref", 0.0, false);
   r.series_interval_s = time_key("series_interval", "series_interval_tref", 0.0, false);
+  // the window of time averages (cgd-coarse's slip): by default the first 15 t_ref are transient
+  r.sampling_start_s = time_key("sampling_start", "sampling_start_tref", 15.0 * x.t_ref_s, false);
 
   if (s.has_contacts()) {
     const double k_n_primary =

@@ -58,6 +58,7 @@ struct RunConfig {
   double dump_interval_s = 0.0;       // from dump_interval or dump_interval_tref; 0: final state only
   double series_interval_s = 0.0;     // 0: one series row per (fluid or DEM) output step, see sim
   double checkpoint_wall_s = 600.0;   // wall-clock seconds between checkpoints
+  double sampling_start_s = 0.0;      // start of the time-average window (default 15 t_ref; 0 without fluid)
   std::optional<double> dt_s;         // explicit time step (needed when contact.model = "none" and no fluid)
 };
 

@@ -1,0 +1,134 @@
+#include "coarse/coarse.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <sstream>
+
+#include "core/error.hpp"
+#include "core/h5.hpp"
+#include "core/output.hpp"
+
+namespace cgd::coarse {
+
+namespace {
+std::string num(double v, int precision = 4) {
+  std::ostringstream o;
+  o.precision(precision);
+  o << v;
+  return o.str();
+}
+}  // namespace
+
+void check_coarse_scene(const Scene& s, int ranks) {
+  const std::string& file = s.source_path;
+  if (!s.solves_fluid())
+    throw InputError(file + ": [fluid] with coupling \"two-way\" or \"one-way\" is required: cgd-coarse runs "
+                            "coarse-grid CFD-DEM / CFD-DPM (a dry or quiescent scene is a cgd-generate job)");
+  const DerivedScales& x = s.derived;
+  double cell_min = 1e300;
+  for (int a = 0; a < 3; ++a) cell_min = std::min(cell_min, s.domain.size_m[a] / x.cells[a]);
+  if (x.parcel_diameter_m > cell_min * (1 + 1e-12))
+    throw InputError(file + ": particles.parcel_size = " + num(s.particles.parcel_size) + " gives parcels of " +
+                     num(x.parcel_diameter_m / s.particles.diameter_m) + " d_p, wider than a fluid cell (" +
+                     num(cell_min / s.particles.diameter_m) +
+                     " d_p): the point-parcel mapping of drag and void fraction no longer holds; allowed: "
+                     "parcel_size <= cell/d_p (coarsen the grid or use smaller parcels)");
+  if (x.particle_count < kMinimumParcels)
+    throw InputError(file + ": the scene holds " + std::to_string(x.particle_count) + " parcels; at least " +
+                     std::to_string(kMinimumParcels) +
+                     " are needed for a domain slip with a few-per-cent statistical error (rule: N >= " +
+                     std::to_string(kMinimumParcels) + "); use smaller parcels, a larger box or a higher solids fraction");
+  // the slabs along y are whole rows of cells (FFTW-MPI blocks): the thinnest has floor(n_y/ranks) rows
+  const double slab = std::floor(static_cast<double>(x.cells[1]) / ranks) * s.domain.size_m[1] / x.cells[1];
+  const double cutoff = x.parcel_diameter_m * (1.0 + s.contact.skin_over_dp);
+  if (s.has_contacts() && slab < cutoff)
+    throw InputError(file + ": with " + std::to_string(ranks) + " ranks the thinnest slab along y is " +
+                     num(slab / s.particles.diameter_m) + " d_p, thinner than the contact cutoff " +
+                     num(cutoff / s.particles.diameter_m) + " d_p (parcel diameter + skin): use at most " +
+                     std::to_string(std::max(1, static_cast<int>(x.cells[1] / std::ceil(cutoff / (s.domain.size_m[1] / x.cells[1]))))) +
+                     " ranks");
+  if (!(s.run.sampling_start_s < s.run.end_time_s))
+    throw InputError(file + ": run.sampling_start (" + num(s.run.sampling_start_s) + " s = " +
+                     num(s.run.sampling_start_s / x.t_ref_s) + " t_ref; default 15 t_ref) must be before run.end_time (" +
+                     num(s.run.end_time_s) + " s): the slip is averaged over the window in between");
+}
+
+SlipSummary summarise_run(const std::string& run_dir, double u_t, double start, int ranks, int batches) {
+  const std::string path = (std::filesystem::path(run_dir) / "series.h5").string();
+  const schema::Series series = schema::Series::read(path, MPI_COMM_SELF);
+  const std::vector<double>& t = series.column("time");
+  const std::vector<double>& slip3 = series.column("slip_velocity");
+  const std::vector<double>& wall = series.column("wall_seconds");
+  std::vector<double> slip(t.size());
+  for (std::size_t i = 0; i < t.size(); ++i) slip[i] = slip3[3 * i + 1] / u_t;
+  SlipSummary s;
+  s.run_dir = run_dir;
+  s.u_t_m_s = u_t;
+  try {
+    s.slip = window_average(t, slip, start, 1e300, batches);
+  } catch (const std::invalid_argument& e) {
+    throw InputError(path + ": cannot average the slip: " + e.what());
+  }
+  s.simulated_s = t.empty() ? 0 : t.back();
+  s.wall_s = wall.empty() ? 0 : wall.back();
+  s.ranks = ranks;
+  s.core_seconds_per_simulated_second = s.simulated_s > 0 ? s.wall_s * ranks / s.simulated_s : 0;
+  return s;
+}
+
+Comparison compare(const SlipSummary& coarse, const SlipSummary& reference) {
+  Comparison c{coarse, reference, 0, 0};
+  const double a = coarse.slip.mean, b = reference.slip.mean;
+  c.relative_error = (a - b) / b;
+  // error propagation of a/b - 1 with independent standard errors
+  c.relative_error_stderr = std::abs(a / b) * std::hypot(coarse.slip.standard_error / a, reference.slip.standard_error / b);
+  return c;
+}
+
+std::string describe(const SlipSummary& s) {
+  std::ostringstream o;
+  o << "slip <u_slip,y>/u_t = " << num(s.slip.mean) << " +- " << num(s.slip.standard_error, 2) << " (batch means, "
+    << s.slip.batches << " batches over " << num(s.slip.start_s) << "-" << num(s.slip.end_s) << " s); cost "
+    << num(s.core_seconds_per_simulated_second) << " core-s per simulated s (" << s.ranks << " rank(s))";
+  return o.str();
+}
+
+std::string describe(const Comparison& c) {
+  std::ostringstream o;
+  o << "reference " << c.reference.run_dir << ": " << num(c.reference.slip.mean) << " +- "
+    << num(c.reference.slip.standard_error, 2) << "; relative error " << num(100 * c.relative_error, 3) << " % +- "
+    << num(100 * c.relative_error_stderr, 2) << " %";
+  return o.str();
+}
+
+void write_summary(const std::string& path, const Scene& scene, const SlipSummary& s,
+                   const std::optional<Comparison>& cmp, const std::string& drag) {
+  h5::write_atomically(path, MPI_COMM_SELF, [&](h5::File& f) {
+    schema::write_common(f, "coarse_summary", scene);
+    const std::string g = "/";
+    f.set_attr(g, "drag", drag);
+    f.set_attr(g, "parcel_size", scene.particles.parcel_size);
+    f.set_attr(g, "cell_over_dp", std::cbrt(scene.domain.size_m[0] * scene.domain.size_m[1] * scene.domain.size_m[2] /
+                                            (1.0 * scene.derived.cells[0] * scene.derived.cells[1] * scene.derived.cells[2])) /
+                                      scene.particles.diameter_m);
+    f.set_attr(g, "slip_over_ut", s.slip.mean);
+    f.set_attr(g, "slip_stderr", s.slip.standard_error);
+    f.set_attr(g, "window_start_s", s.slip.start_s);
+    f.set_attr(g, "window_end_s", s.slip.end_s);
+    f.set_attr(g, "batches", static_cast<std::int64_t>(s.slip.batches));
+    f.set_attr(g, "simulated_s", s.simulated_s);
+    f.set_attr(g, "wall_s", s.wall_s);
+    f.set_attr(g, "ranks", static_cast<std::int64_t>(s.ranks));
+    f.set_attr(g, "core_seconds_per_simulated_second", s.core_seconds_per_simulated_second);
+    if (cmp) {
+      f.set_attr(g, "reference", cmp->reference.run_dir);
+      f.set_attr(g, "reference_slip_over_ut", cmp->reference.slip.mean);
+      f.set_attr(g, "reference_slip_stderr", cmp->reference.slip.standard_error);
+      f.set_attr(g, "relative_error", cmp->relative_error);
+      f.set_attr(g, "relative_error_stderr", cmp->relative_error_stderr);
+    }
+  });
+}
+
+}  // namespace cgd::coarse

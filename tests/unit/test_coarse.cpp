@@ -1,0 +1,83 @@
+// cgd-coarse's checks and the time average with batch-means error bars (coarse/coarse.hpp,
+// core/time_average.hpp).
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <random>
+
+#include "coarse/coarse.hpp"
+#include "core/error.hpp"
+#include "core/scene.hpp"
+#include "core/time_average.hpp"
+
+namespace cgd {
+namespace {
+
+TEST(TimeAverage, ConstantAndLinearSignals) {
+  // y = 2: mean 2 and no spread between batches. y = t on uneven rows: the time-weighted mean of a
+  // ramp over [0, 1) is 1/2 (rows weighted by the time to the next: the rectangle rule, exact to dt/2).
+  std::vector<double> t, c, r;
+  double time = 0;
+  for (int i = 0; i < 1000; ++i) {
+    t.push_back(time);
+    c.push_back(2.0);
+    r.push_back(time);
+    time += (i % 2 ? 0.0005 : 0.0015);
+  }
+  const WindowAverage a = window_average(t, c, 0.0, 1.0);
+  EXPECT_DOUBLE_EQ(a.mean, 2.0);
+  EXPECT_NEAR(a.standard_error, 0.0, 1e-15);
+  EXPECT_EQ(a.batches, 10);
+  const WindowAverage b = window_average(t, r, 0.0, 1.0);
+  EXPECT_NEAR(b.mean, 0.5, 0.0015);
+  EXPECT_THROW(window_average(t, r, 0.999, 1.0), std::invalid_argument);
+}
+
+TEST(TimeAverage, BatchMeansErrorOfWhiteNoise) {
+  // Uncorrelated noise of sd 1 on 20000 rows: the standard error of the mean is 1/sqrt(20000) = 0.0071.
+  // The batch-means estimate from 10 batches has a relative spread of 1/sqrt(2 * 9) = 24 %: over 20
+  // seeds the mean estimate must be within 15 % (24 %/sqrt(20) = 5 %, three of those).
+  double sum = 0;
+  for (unsigned seed = 0; seed < 20; ++seed) {
+    std::mt19937 rng(seed);
+    std::normal_distribution<double> N(0, 1);
+    std::vector<double> t, y;
+    for (int i = 0; i < 20000; ++i) {
+      t.push_back(i);
+      y.push_back(N(rng));
+    }
+    sum += window_average(t, y, 0, 1e9).standard_error;
+  }
+  EXPECT_NEAR(sum / 20, 1 / std::sqrt(20000.0), 0.15 / std::sqrt(20000.0));
+}
+
+std::string coarse_scene(const std::string& extra_particles, const std::string& extra_fluid, const std::string& extra_run) {
+  return "[domain]\nsize_dp = [45, 180, 45]\n[particles]\ndiameter = 75e-6\ndensity = 1500.0\nsolids_fraction = 0.05\n" +
+         extra_particles + "\n[contact]\ngamma_star = 3e-3\n[fluid]\ndx_over_dp = 7.5\n" + extra_fluid +
+         "\n[run]\nend_time_tref = 20\n" + extra_run + "\n";
+}
+
+TEST(CoarseChecks, RefusesParcelsWiderThanACellTooFewParcelsThinSlabsAndAnEmptyWindow) {
+  const Scene ok = load_scene_from_string(coarse_scene("parcel_size = 4", "", ""), "ok.toml");
+  EXPECT_NO_THROW(coarse::check_coarse_scene(ok, 1));
+  auto refused = [](const std::string& text, int ranks, const std::string& expected) {
+    const Scene s = load_scene_from_string(text, "bad.toml");
+    try {
+      coarse::check_coarse_scene(s, ranks);
+      ADD_FAILURE() << "accepted: " << expected;
+    } catch (const InputError& e) {
+      EXPECT_NE(std::string(e.what()).find(expected), std::string::npos) << e.what();
+    }
+  };
+  refused(coarse_scene("parcel_size = 8", "", ""), 1, "wider than a fluid cell");  // 8 d_p > 7.5 d_p
+  const std::string seven = coarse_scene("parcel_size = 7", "", "");
+  refused(std::string(seven).replace(seven.find("solids_fraction = 0.05"), 22, "solids_fraction = 0.02"), 1,
+          "at least 100");  // 40 parcels
+  refused(coarse_scene("", "", "sampling_start_tref = 25"), 1, "must be before run.end_time");
+  // 24 rows over 13 ranks: the thinnest slab is 1 row = 7.5 d_p, the cutoff of 7 d_p parcels 8.05 d_p
+  refused(std::string(seven).replace(seven.find("solids_fraction = 0.05"), 22, "solids_fraction = 0.30"), 13,
+          "thinner than the contact cutoff");
+}
+
+}  // namespace
+}  // namespace cgd
