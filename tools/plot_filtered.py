@@ -36,6 +36,13 @@ def radl2014(phi, F, csv=RADL_CSV):
     return np.array([ev("h", p) / (1.0 + ev("a", p) * F) for p in phi])
 
 
+class _NoAxes:
+    """Stands in for matplotlib's axes when only the table is wanted."""
+
+    def __getattr__(self, name):
+        return lambda *args, **kwargs: None
+
+
 def widths(f):
     names = sorted([k for k in f if k.startswith("width_")], key=lambda k: f[k].attrs["width_m"])
     return names + (["whole_box"] if "whole_box" in f else [])
@@ -46,6 +53,7 @@ def main():
     ap.add_argument("file")
     ap.add_argument("-o", "--output", default=None, help="PNG to write (default: FILE with .png)")
     ap.add_argument("--min-count", type=int, default=200, help="bins with fewer samples are not drawn (default 200)")
+    ap.add_argument("--no-plot", action="store_true", help="print the table only")
     ap.add_argument("--table-phi", default="0.02,0.05,0.08,0.1,0.15,0.2", help="phi_bar values of the printed table")
     a = ap.parse_args()
     try:
@@ -54,13 +62,16 @@ def main():
         sys.exit(f"plot_filtered: {a.file}: cannot open ({e})")
     if f.attrs.get("cgd_format") != "filtered":
         sys.exit(f"plot_filtered: {a.file}: cgd_format is {f.attrs.get('cgd_format')!r}, expected 'filtered'")
-    import matplotlib
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    dp = f.attrs["diameter_m"]
-    fig, ax = plt.subplots(figsize=(7.5, 5))
-    colors = plt.rcParams["axes.prop_cycle"].by_key()["color"]
+    if a.no_plot:
+        plt = None
+        ax = _NoAxes()
+        colors = ["k"]
+    else:
+        import matplotlib
+        matplotlib.use("Agg")
+        import matplotlib.pyplot as plt
+        fig, ax = plt.subplots(figsize=(7.5, 5))
+        colors = plt.rcParams["axes.prop_cycle"].by_key()["color"]
     table_phi = [float(x) for x in a.table_phi.split(",")]
     print(f"{a.file}: H = 1 - beta_bar/beta_micro ({f.attrs['micro_drag']}), 95 % block-bootstrap intervals; "
           f"Radl 2014 = h/(1 + a F) at the same F")
@@ -95,6 +106,8 @@ def main():
             else:
                 cells.append(f"{'-':>26}")
         print(f"{G.attrs['width_over_dp']:9.2f} {F:6.3f} " + " ".join(cells))
+    if plt is None:
+        return
     ax.axhline(0, color="k", lw=0.5)
     ax.set_xlabel("filtered solids fraction φ̄")
     ax.set_ylabel("H = 1 − β̄ / β_micro")
