@@ -248,6 +248,14 @@ struct SplineFit {
   BSpline spline;
   double lambda = 0;  // absolute penalty weight
   double edf = 0, gcv = 0;
+  double scale2 = 1;  // sigma^2 = RSS_w / (n - edf): the weights' scale as the residuals show it
+  // Bias allowance of the coefficients, sigma^2 A^-1 (lambda P) A^-1 with A = X'WX + lambda P: the part of
+  // the Bayesian posterior covariance sigma^2 A^-1 of a penalised spline (Wahba 1983, J. R. Stat. Soc. B
+  // 45:133; Nychka 1988, JASA 83:1134) that the frequentist (sampling) covariance sigma^2 A^-1 X'WX A^-1
+  // lacks. Nychka showed that intervals from the posterior covariance have close to nominal coverage
+  // averaged over x because this term accounts for the smoothing bias; the bootstrap estimates the
+  // sampling part (with the data's true correlations), this term is added to it.
+  Eigen::MatrixXd bias_cov;
 };
 
 /// The B-spline basis (order 4) on uniform breakpoints over [lo, hi]; knots as stored in model files.
@@ -299,6 +307,9 @@ SplineFit pspline(const Basis& basis, const std::vector<double>& x, const std::v
     out.spline.order = 4;
     out.spline.knots = basis.knots;
     out.spline.coefficients.assign(c.data(), c.data() + m);
+    out.scale2 = n - edf > 0.5 ? rss / (static_cast<double>(n) - edf) : 1.0;
+    const Eigen::MatrixXd Ainv = ldlt.solve(Eigen::MatrixXd::Identity(m, m));
+    out.bias_cov = out.scale2 * Ainv * (lam * P) * Ainv;
   };
   SplineFit best;
   if (lambda >= 0) {
@@ -333,6 +344,19 @@ Curves fit_curves(const std::vector<BinEstimate>& bins, double lo, double hi, in
   }
   const Basis basis(lo, hi, nbreak);
   return {pspline(basis, x, yh, wh, lambda_h), pspline(basis, x, ya, wa, lambda_a)};
+}
+
+/// Variance b(x)' C b(x) of a spline with coefficient covariance C at x (clamped into the knot range).
+double spline_variance(const BSpline& s, const Eigen::MatrixXd& C, double x) {
+  const std::size_t n = s.coefficients.size();
+  Eigen::VectorXd b = Eigen::VectorXd::Zero(static_cast<Eigen::Index>(n));
+  BSpline unit = s;
+  for (std::size_t j = 0; j < n; ++j) {  // basis function j = the spline with coefficient e_j
+    std::fill(unit.coefficients.begin(), unit.coefficients.end(), 0.0);
+    unit.coefficients[j] = 1.0;
+    b(static_cast<Eigen::Index>(j)) = unit(x);
+  }
+  return b.dot(C * b);
 }
 
 double quantile(std::vector<double>& v, double q) {
@@ -498,6 +522,32 @@ FitResult fit_filtered_drag(const std::vector<FilteredFile>& files, const FitOpt
       R.H_high[k] = quantile(rep_H[k], 0.975);
     }
     R.replicates = o.bootstrap;
+    // Widen the percentile bands by the smoothing-bias allowance of the main fit (SplineFit::bias_cov),
+    // added in quadrature to each side, in the fitted variables (h; log a); below phi_crit h's
+    // allowance scales like h (phi/phi_crit), a's is constant.
+    auto widen = [](double est, double& lo, double& hi, double var) {
+      lo = est - std::sqrt((est - lo) * (est - lo) + kZ95 * kZ95 * var);
+      hi = est + std::sqrt((hi - est) * (hi - est) + kZ95 * kZ95 * var);
+    };
+    for (std::size_t i = 0; i < nphi; ++i) {
+      const double phi = R.band_phi[i], at = std::clamp(phi, o.phi_crit, phi_max);
+      const double f = phi < o.phi_crit ? phi / o.phi_crit : 1.0;
+      const double vh = f * f * spline_variance(M.h_spline, main.h.bias_cov, at);
+      const double va = spline_variance(M.log_a_spline, main.log_a.bias_cov, at);
+      widen(R.h[i], R.h_low[i], R.h_high[i], vh);
+      R.h_low[i] = std::max(R.h_low[i], 0.0);
+      R.h_high[i] = std::min(R.h_high[i], o.h_max);
+      double log_lo = std::log(R.a_low[i]), log_hi = std::log(R.a_high[i]);
+      widen(std::log(R.a[i]), log_lo, log_hi, va);
+      R.a_low[i] = std::exp(log_lo);
+      R.a_high[i] = std::exp(log_hi);
+      for (std::size_t j = 0; j < nF; ++j) {
+        const double g = 1.0 / (1.0 + R.a[i] * R.band_F[j]);
+        const double dH_dlog_a = -R.h[i] * R.a[i] * R.band_F[j] * g * g;
+        const std::size_t k = j * nphi + i;
+        widen(R.H[k], R.H_low[k], R.H_high[k], g * g * vh + dH_dlog_a * dH_dlog_a * va);
+      }
+    }
   }
 
   // ---- step 4: residuals per width (per-bin fits and the smoothed model), whole box as a check
