@@ -199,7 +199,9 @@ TEST(FitBadInput, TooFewWidthsOrBins) {
   two.F = {0.6, 0.1};
   expect_input_error([&] { fit({make_synthetic(two)}, 0); }, {"synthetic_1.h5", "too few filter widths", "2 distinct"});
   SyntheticSpec sparse;
-  sparse.count = 1;  // 80 samples per bin and width < min_count = 100
+  sparse.count = 1;  // 1 sample per snapshot, 2 x 20 snapshots: 40 per bin and width < min_count = 100
+  sparse.snapshots = 20;
+  sparse.block = 5;
   expect_input_error([&] { fit({make_synthetic(sparse)}, 0); }, {"too few phi bins", ">= 100 samples"});
 }
 
