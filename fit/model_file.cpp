@@ -172,8 +172,19 @@ std::string fit_report(const FitResult& R, const std::vector<FilteredFile>& file
   out << "bins: " << used << " fitted, " << dropped << " dropped (a bin needs >= " << o.min_count
       << " samples at a width for that width to count, and >= " << o.min_widths
       << " such widths; bins below phi_crit = " << o.phi_crit << " are not fitted)\n";
-  for (const BinEstimate& b : R.bins)
-    if (!b.used && b.phi_center > 0) out << "  dropped phi " << format("%.3f", b.phi_center) << ": " << b.dropped << "\n";
+  // dropped bins, consecutive bins with the same reason on one line
+  for (std::size_t i = 0; i < R.bins.size();) {
+    if (R.bins[i].used) {
+      ++i;
+      continue;
+    }
+    std::size_t j = i;
+    while (j + 1 < R.bins.size() && !R.bins[j + 1].used && R.bins[j + 1].dropped == R.bins[i].dropped) ++j;
+    out << "  dropped phi " << format("%.3f", R.bins[i].phi_center);
+    if (j > i) out << " .. " << format("%.3f", R.bins[j].phi_center) << " (" << j - i + 1 << " bins)";
+    out << ": " << R.bins[i].dropped << "\n";
+    i = j + 1;
+  }
   out << "per-bin fits: chi2/dof = " << format("%.2f", R.chi2_per_dof)
       << " (about 1 when 1/(1 + aF) describes the width dependence within the filter's intervals)\n";
   out << "splines: " << R.breakpoints << " breakpoints, GCV smoothing: edf(h) = " << format("%.1f", R.edf_h)
