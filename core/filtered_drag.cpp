@@ -69,17 +69,22 @@ double parcel_correction(double alpha, double a_c, double k_c) {
   return a_c + (1.0 - a_c) * std::exp(-k_c * (alpha - 1.0));
 }
 
-double Radl2014Curves::h(double phi) const { return piecewise(kRadlH, phi); }
-double Radl2014Curves::a(double phi) const { return piecewise(kRadlA, phi); }
+double Radl2014Curves::h(double phi) const {
+  return piecewise(kRadlH, phi);
+}
+double Radl2014Curves::a(double phi) const {
+  return piecewise(kRadlA, phi);
+}
 
 double BSpline::operator()(double x) const {
   const int k = order;
   const std::size_t n = coefficients.size();
   x = std::clamp(x, lower(), upper());
   // knot span i: t_i <= x < t_{i+1}, k-1 <= i <= n-1 (x = t_n belongs to the last span)
-  std::size_t i = static_cast<std::size_t>(std::upper_bound(knots.begin(), knots.begin() + static_cast<long>(n), x) -
-                                           knots.begin()) -
-                  1;
+  std::size_t i =
+      static_cast<std::size_t>(std::upper_bound(knots.begin(), knots.begin() + static_cast<long>(n), x) -
+                               knots.begin()) -
+      1;
   i = std::clamp<std::size_t>(i, static_cast<std::size_t>(k - 1), n - 1);
   // de Boor: d_j = c_{j+i-p}, p = k - 1; d_j <- (1 - alpha) d_{j-1} + alpha d_j
   double d[16];
@@ -108,7 +113,8 @@ double SplineCurves::a(double phi) const {
 
 FilteredDragSetup filtered_drag_setup(const Scene& scene, const Vec3& cell_spacing_m) {
   FilteredDragSetup setup;
-  if (!scene.fluid || (scene.fluid->drag != DragLaw::Radl2014 && scene.fluid->drag != DragLaw::Model)) return setup;
+  if (!scene.fluid || (scene.fluid->drag != DragLaw::Radl2014 && scene.fluid->drag != DragLaw::Model))
+    return setup;
   setup.filter_width_m = std::cbrt(cell_spacing_m[0] * cell_spacing_m[1] * cell_spacing_m[2]);
   setup.l_char_m = scene.derived.l_char_m;
   setup.parcel_size = scene.particles.parcel_size;
@@ -135,8 +141,10 @@ void check_filtered_setup(DragLaw law, const FilteredDragSetup& setup) {
     throw InputError(name + ": the parcel size alpha must be >= 1, got " + number(setup.parcel_size));
 }
 
-double beta_p(DragLaw law, const DragParams& params, const FilteredDragSetup& setup, double phi, double slip_speed) {
-  return visit_any_drag_law(law, params, setup, [&](const auto& drag) { return drag.beta_p(phi, slip_speed); });
+double beta_p(DragLaw law, const DragParams& params, const FilteredDragSetup& setup, double phi,
+              double slip_speed) {
+  return visit_any_drag_law(law, params, setup,
+                            [&](const auto& drag) { return drag.beta_p(phi, slip_speed); });
 }
 
 namespace {
@@ -152,9 +160,10 @@ BSpline read_spline(const h5::File& f, const std::string& group) {
   const bool sorted = std::is_sorted(s.knots.begin(), s.knots.end());
   if (s.order < 1 || s.order > 15 || n < static_cast<std::size_t>(s.order) ||
       s.knots.size() != n + static_cast<std::size_t>(s.order) || !sorted || !(s.upper() > s.lower()))
-    throw InputError(path + ": " + group +
-                     ": not a valid B-spline (needs 1 <= order <= 15, len(knots) = len(coefficients) + order, "
-                     "non-decreasing knots spanning an interval)");
+    throw InputError(
+        path + ": " + group +
+        ": not a valid B-spline (needs 1 <= order <= 15, len(knots) = len(coefficients) + order, "
+        "non-decreasing knots spanning an interval)");
   for (double c : s.coefficients)
     if (!std::isfinite(c)) throw InputError(path + ": " + group + "/coefficients: not finite");
   return s;
@@ -170,28 +179,34 @@ DragModel load_drag_model(const std::string& path) {
   need("cgd_format");
   const std::string format = f.attr_string("/", "cgd_format");
   if (format != "drag_model")
-    throw InputError(path + ": cgd_format = \"" + format + "\": not a drag model file (expected \"drag_model\", " +
-                     "written by cgd-fit)");
+    throw InputError(path + ": cgd_format = \"" + format +
+                     "\": not a drag model file (expected \"drag_model\", " + "written by cgd-fit)");
   need("cgd_format_version");
   if (f.attr_int("/", "cgd_format_version") != schema::kFormatVersion)
-    throw InputError(path + ": cgd_format_version = " + std::to_string(f.attr_int("/", "cgd_format_version")) +
+    throw InputError(path +
+                     ": cgd_format_version = " + std::to_string(f.attr_int("/", "cgd_format_version")) +
                      ": this build reads version " + std::to_string(schema::kFormatVersion));
   DragModel m;
   m.path = path;
-  for (const char* key : {"base_drag", "u_t_convention", "u_t_m_s", "l_char_m", "phi_crit", "h_max", "diameter_m",
-                          "particle_density_kg_m3", "fluid_density_kg_m3", "fluid_viscosity_Pa_s", "gravity_m_s2"})
+  for (const char* key :
+       {"base_drag", "u_t_convention", "u_t_m_s", "l_char_m", "phi_crit", "h_max", "diameter_m",
+        "particle_density_kg_m3", "fluid_density_kg_m3", "fluid_viscosity_Pa_s", "gravity_m_s2"})
     need(key);
   const std::string base = f.attr_string("/", "base_drag");
-  if (base == "beetstra") m.base_law = DragLaw::Beetstra;
-  else if (base == "wen-yu") m.base_law = DragLaw::WenYu;
-  else if (base == "stokes") m.base_law = DragLaw::Stokes;
+  if (base == "beetstra")
+    m.base_law = DragLaw::Beetstra;
+  else if (base == "wen-yu")
+    m.base_law = DragLaw::WenYu;
+  else if (base == "stokes")
+    m.base_law = DragLaw::Stokes;
   else
-    throw InputError(path + ": base_drag = \"" + base +
-                     "\": a model's base law must be a microscopic law (\"beetstra\", \"wen-yu\", \"stokes\")");
+    throw InputError(
+        path + ": base_drag = \"" + base +
+        "\": a model's base law must be a microscopic law (\"beetstra\", \"wen-yu\", \"stokes\")");
   m.u_t_convention = f.attr_string("/", "u_t_convention");
   if (m.u_t_convention != kUtConvention)
-    throw InputError(path + ": u_t_convention = \"" + m.u_t_convention + "\": this build uses \"" + kUtConvention +
-                     "\" (models.md)");
+    throw InputError(path + ": u_t_convention = \"" + m.u_t_convention + "\": this build uses \"" +
+                     kUtConvention + "\" (models.md)");
   m.u_t_m_s = f.attr_double("/", "u_t_m_s");
   m.l_char_m = f.attr_double("/", "l_char_m");
   m.phi_crit = f.attr_double("/", "phi_crit");
@@ -216,8 +231,7 @@ DragModel load_drag_model(const std::string& path) {
 
 void check_model_matches_scene(const DragModel& model, const Scene& scene) {
   const std::string where = model.path + " (model) and " + scene.source_path + " (scene)";
-  if (!scene.fluid)
-    throw InputError(where + ": the scene has no [fluid] section; a drag model needs one");
+  if (!scene.fluid) throw InputError(where + ": the scene has no [fluid] section; a drag model needs one");
   auto same = [](double a, double b) { return std::abs(a - b) <= 1e-6 * std::max(std::abs(a), std::abs(b)); };
   auto compare = [&](const char* scene_key, const char* model_key, double scene_value, double model_value) {
     if (!same(scene_value, model_value))
@@ -227,10 +241,12 @@ void check_model_matches_scene(const DragModel& model, const Scene& scene) {
   };
   const Vec3& g = scene.domain.gravity_m_s2;
   compare("particles.diameter", "diameter_m", scene.particles.diameter_m, model.diameter_m);
-  compare("particles.density", "particle_density_kg_m3", scene.particles.density_kg_m3, model.particle_density_kg_m3);
+  compare("particles.density", "particle_density_kg_m3", scene.particles.density_kg_m3,
+          model.particle_density_kg_m3);
   compare("fluid.density", "fluid_density_kg_m3", scene.fluid->density_kg_m3, model.fluid_density_kg_m3);
   compare("fluid.viscosity", "fluid_viscosity_Pa_s", scene.fluid->viscosity_Pa_s, model.fluid_viscosity_Pa_s);
-  compare("|domain.gravity|", "gravity_m_s2", std::sqrt(g[0] * g[0] + g[1] * g[1] + g[2] * g[2]), model.gravity_m_s2);
+  compare("|domain.gravity|", "gravity_m_s2", std::sqrt(g[0] * g[0] + g[1] * g[1] + g[2] * g[2]),
+          model.gravity_m_s2);
   compare("L_char (derived)", "l_char_m", scene.derived.l_char_m, model.l_char_m);
 }
 

@@ -53,9 +53,9 @@ struct Radl2014Curves {
 /// algorithm. x outside [t_{k-1}, t_n] is clamped into it. The same numbers evaluated with numpy's
 /// de Boor (docs/schema-drag-model.md) give the same value to round-off.
 struct BSpline {
-  int order = 4;                      // k
-  std::vector<double> knots;          // t, size n + k
-  std::vector<double> coefficients;   // c, size n
+  int order = 4;                     // k
+  std::vector<double> knots;         // t, size n + k
+  std::vector<double> coefficients;  // c, size n
   double operator()(double x) const;
   double lower() const { return knots[static_cast<std::size_t>(order - 1)]; }
   double upper() const { return knots[coefficients.size()]; }
@@ -64,18 +64,18 @@ struct BSpline {
 /// A drag model file (cgd_format = "drag_model", docs/schema-drag-model.md) as read by
 /// load_drag_model: what the evaluator needs and what a run checks against its own scene.
 struct DragModel {
-  std::string path;            // as given
-  std::string checksum;        // FNV-1a 64-bit of the file's bytes, 16 hex digits
+  std::string path;      // as given
+  std::string checksum;  // FNV-1a 64-bit of the file's bytes, 16 hex digits
   DragLaw base_law = DragLaw::Beetstra;
   std::string u_t_convention;  // "schiller-naumann" (models.md)
   double u_t_m_s = 0, l_char_m = 0, phi_crit = 0.016;
   double diameter_m = 0, particle_density_kg_m3 = 0, fluid_density_kg_m3 = 0, fluid_viscosity_Pa_s = 0;
-  double gravity_m_s2 = 0;     // |g|
-  BSpline h_spline;            // h on [phi_crit, phi_max] (identity, clamped to [0, h_max])
-  BSpline log_a_spline;        // log a on [phi_crit, phi_max]
-  double h_max = 0.99;         // upper clamp of h (h < 1 keeps beta_bar > 0)
+  double gravity_m_s2 = 0;  // |g|
+  BSpline h_spline;         // h on [phi_crit, phi_max] (identity, clamped to [0, h_max])
+  BSpline log_a_spline;     // log a on [phi_crit, phi_max]
+  double h_max = 0.99;      // upper clamp of h (h < 1 keeps beta_bar > 0)
   double c_corr_a = 0.0, c_corr_k = 0.05;
-  std::string c_corr_source;   // "paper" (Radl & Sundaresan 2014) or "parcel-fit"
+  std::string c_corr_source;  // "paper" (Radl & Sundaresan 2014) or "parcel-fit"
 };
 
 /// Master curves of a fitted model (docs/schema-drag-model.md, "Evaluating h and a"):
@@ -98,16 +98,20 @@ struct FilteredDrag {
   Params params;
   Micro micro;
   Curves curves;
-  double filter_ratio = 0;    // F = L_char / Delta
-  double c_corr = 1;          // c_corr(alpha)
+  double filter_ratio = 0;  // F = L_char / Delta
+  double c_corr = 1;        // c_corr(alpha)
 
   FilteredDrag(const Micro& base, const Curves& c, double F, double parcel_corr)
       : params(base.params), micro(base), curves(c), filter_ratio(F), c_corr(parcel_corr) {}
 
   /// beta_bar / beta_micro (dimensionless) at solids fraction phi.
-  double correction(double phi) const { return c_corr * (1.0 - curves.h(phi) / (1.0 + curves.a(phi) * filter_ratio)); }
+  double correction(double phi) const {
+    return c_corr * (1.0 - curves.h(phi) / (1.0 + curves.a(phi) * filter_ratio));
+  }
   double reynolds(double phi, double slip_speed) const { return micro.reynolds(phi, slip_speed); }
-  double beta_p(double phi, double slip_speed) const { return correction(phi) * micro.beta_p(phi, slip_speed); }
+  double beta_p(double phi, double slip_speed) const {
+    return correction(phi) * micro.beta_p(phi, slip_speed);
+  }
 };
 
 /// What a filtered law needs besides DragParams, fixed for a run: the model file (for
@@ -141,7 +145,8 @@ decltype(auto) visit_any_drag_law(DragLaw law, const DragParams& params, const F
   if (law == DragLaw::Radl2014) {
     check_filtered_setup(law, setup);
     const double F = setup.l_char_m / setup.filter_width_m;
-    const double corr = parcel_correction(setup.parcel_size, Radl2014Curves::kCcorrA, Radl2014Curves::kCcorrK);
+    const double corr =
+        parcel_correction(setup.parcel_size, Radl2014Curves::kCcorrA, Radl2014Curves::kCcorrK);
     return visit(FilteredDrag<BeetstraDrag, Radl2014Curves>(BeetstraDrag(params), Radl2014Curves{}, F, corr));
   }
   if (law == DragLaw::Model) {
@@ -158,7 +163,8 @@ decltype(auto) visit_any_drag_law(DragLaw law, const DragParams& params, const F
 }
 
 /// beta_p of any law (kg m^-3 s^-1), for code that is not hot.
-double beta_p(DragLaw law, const DragParams& params, const FilteredDragSetup& setup, double phi, double slip_speed);
+double beta_p(DragLaw law, const DragParams& params, const FilteredDragSetup& setup, double phi,
+              double slip_speed);
 
 /// Read a model file. InputError naming the file (and the key) if it is missing, not HDF5, not a
 /// drag_model file, of another format version, or incomplete. Reads on the calling process only

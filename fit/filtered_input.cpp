@@ -26,7 +26,8 @@ FilteredFile read_filtered_file(const std::string& path) {
   h5::File f = h5::File::open_read(path, MPI_COMM_SELF);
   auto need_attr = [&](const std::string& object, const char* key) {
     if (!f.has_attr(object, key))
-      throw InputError(path + ": filtered file lacks the attribute " + key + (object == "/" ? "" : " of " + object));
+      throw InputError(path + ": filtered file lacks the attribute " + key +
+                       (object == "/" ? "" : " of " + object));
   };
   auto need = [&](const std::string& dataset) {
     if (!f.exists(dataset)) throw InputError(path + ": filtered file lacks the dataset " + dataset);
@@ -38,7 +39,8 @@ FilteredFile read_filtered_file(const std::string& path) {
                      "\": not a filtered file (cgd-fit reads the \"filtered\" files of cgd-filter)");
   need_attr("/", "cgd_format_version");
   if (f.attr_int("/", "cgd_format_version") != schema::kFormatVersion)
-    throw InputError(path + ": cgd_format_version = " + std::to_string(f.attr_int("/", "cgd_format_version")) +
+    throw InputError(path +
+                     ": cgd_format_version = " + std::to_string(f.attr_int("/", "cgd_format_version")) +
                      ": this build reads version " + std::to_string(schema::kFormatVersion));
   FilteredFile out;
   out.path = path;
@@ -57,8 +59,7 @@ FilteredFile read_filtered_file(const std::string& path) {
   if (p.micro_drag != "beetstra" && p.micro_drag != "wen-yu" && p.micro_drag != "stokes")
     throw InputError(path + ": micro_drag = \"" + p.micro_drag +
                      "\": the runs' law must be a microscopic law (\"beetstra\", \"wen-yu\", \"stokes\")");
-  if (!(p.l_char_m > 0))
-    throw InputError(path + ": l_char_m = " + number(p.l_char_m) + ": must be > 0");
+  if (!(p.l_char_m > 0)) throw InputError(path + ": l_char_m = " + number(p.l_char_m) + ": must be > 0");
 
   need("/bins/phi_edges");
   out.phi_edges = f.read_double("/bins/phi_edges");
@@ -68,7 +69,8 @@ FilteredFile read_filtered_file(const std::string& path) {
 
   // /runs and /snapshots
   need("/runs/mean_solids_fraction");
-  out.run_paths = f.has_attr("/runs", "paths") ? f.attr_strings("/runs", "paths") : std::vector<std::string>{};
+  out.run_paths =
+      f.has_attr("/runs", "paths") ? f.attr_strings("/runs", "paths") : std::vector<std::string>{};
   const std::size_t n_runs = f.dims("/runs/mean_solids_fraction").at(0);
   if (out.run_paths.size() != n_runs) out.run_paths.resize(n_runs, path);
   need("/snapshots/run_index");
@@ -85,7 +87,8 @@ FilteredFile read_filtered_file(const std::string& path) {
 
   // the widths: /width_0, /width_1, ... then /whole_box
   std::vector<std::string> groups;
-  for (int k = 0; f.exists("/width_" + std::to_string(k)); ++k) groups.push_back("/width_" + std::to_string(k));
+  for (int k = 0; f.exists("/width_" + std::to_string(k)); ++k)
+    groups.push_back("/width_" + std::to_string(k));
   if (f.exists("/whole_box")) groups.push_back("/whole_box");
   out.has_per_snapshot = !groups.empty() && f.exists(groups.front() + "/per_snapshot/numerator");
   for (const std::string& g : groups) {
@@ -112,8 +115,8 @@ FilteredFile read_filtered_file(const std::string& path) {
         need(ds);
         const auto dims = f.dims(ds);
         if (dims.size() != 2 || dims[0] != ns || dims[1] != nb)
-          throw InputError(path + ": " + ds + " must have shape (n_snapshots, n_bins) = (" + std::to_string(ns) +
-                           ", " + std::to_string(nb) + ")");
+          throw InputError(path + ": " + ds + " must have shape (n_snapshots, n_bins) = (" +
+                           std::to_string(ns) + ", " + std::to_string(nb) + ")");
       }
       w.numerator = f.read_double(g + "/per_snapshot/numerator");
       w.micro = f.read_double(g + "/per_snapshot/micro");
@@ -134,8 +137,8 @@ void check_same_physics(const std::vector<FilteredFile>& files) {
     const FilteredFile& o = files[i];
     const std::string both = o.path + " and " + ref.path;
     auto differ = [&](const char* key, const std::string& mine, const std::string& theirs) {
-      throw InputError(both + " are filtered files of different physics and cannot be pooled: " + key + " = " +
-                       mine + " in " + o.path + ", " + theirs + " in " + ref.path);
+      throw InputError(both + " are filtered files of different physics and cannot be pooled: " + key +
+                       " = " + mine + " in " + o.path + ", " + theirs + " in " + ref.path);
     };
     if (o.physics.micro_drag != ref.physics.micro_drag)
       differ("micro_drag", "\"" + o.physics.micro_drag + "\"", "\"" + ref.physics.micro_drag + "\"");
@@ -147,10 +150,12 @@ void check_same_physics(const std::vector<FilteredFile>& files) {
         {"u_t_m_s", &Physics::u_t_m_s},  // derived from the above and g: a different g shows here
         {"l_char_m", &Physics::l_char_m}};
     for (const auto& [key, member] : keys)
-      if (!same(o.physics.*member, ref.physics.*member)) differ(key, number(o.physics.*member), number(ref.physics.*member));
+      if (!same(o.physics.*member, ref.physics.*member))
+        differ(key, number(o.physics.*member), number(ref.physics.*member));
     if (o.phi_edges.size() != ref.phi_edges.size() ||
         !std::equal(o.phi_edges.begin(), o.phi_edges.end(), ref.phi_edges.begin(), same))
-      throw InputError(both + " have different phi bins (/bins/phi_edges); filter the runs with the same bins "
+      throw InputError(both +
+                       " have different phi bins (/bins/phi_edges); filter the runs with the same bins "
                        "to pool them");
   }
 }

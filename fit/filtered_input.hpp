@@ -19,8 +19,8 @@ struct Physics {
 
 /// One filter width of one file (`/width_<k>`, or `/whole_box`), per phi bin.
 struct WidthSeries {
-  std::string group;       // "/width_0", ..., "/whole_box"
-  double F = 0;            // L_char / width
+  std::string group;  // "/width_0", ..., "/whole_box"
+  double F = 0;       // L_char / width
   double width_m = 0;
   bool whole_box = false;
   std::vector<double> H, H_low, H_high, phi_mean;  // per bin (NaN where the bin is empty)
@@ -32,11 +32,11 @@ struct WidthSeries {
 
 struct FilteredFile {
   std::string path, checksum;
-  std::string scene_toml;             // root attribute `scene`
+  std::string scene_toml;  // root attribute `scene`
   Physics physics;
-  std::vector<double> phi_edges;      // /bins/phi_edges
-  std::vector<WidthSeries> widths;    // the box widths in file order, then /whole_box if present
-  std::vector<std::string> run_paths; // /runs paths
+  std::vector<double> phi_edges;       // /bins/phi_edges
+  std::vector<WidthSeries> widths;     // the box widths in file order, then /whole_box if present
+  std::vector<std::string> run_paths;  // /runs paths
   std::vector<std::int64_t> snapshot_run, snapshot_block;  // /snapshots/run_index, block
   bool has_per_snapshot = false;
   std::size_t bins() const { return phi_edges.empty() ? 0 : phi_edges.size() - 1; }

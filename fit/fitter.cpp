@@ -275,7 +275,8 @@ struct Basis {
     const double lo = knots.front(), hi = knots.back();
     for (std::size_t i = 0; i < x.size(); ++i) {
       gsl_bspline_eval(std::clamp(x[i], lo, hi), B, ws.get());
-      for (std::size_t j = 0; j < ncoef; ++j) X(static_cast<Eigen::Index>(i), static_cast<Eigen::Index>(j)) = gsl_vector_get(B, j);
+      for (std::size_t j = 0; j < ncoef; ++j)
+        X(static_cast<Eigen::Index>(i), static_cast<Eigen::Index>(j)) = gsl_vector_get(B, j);
     }
     gsl_vector_free(B);
     return X;
@@ -303,7 +304,8 @@ SplineFit pspline(const Basis& basis, const std::vector<double>& x, const std::v
     const double rss = (Wv.array() * r.array().square()).sum();
     out.lambda = lam;
     out.edf = edf;
-    out.gcv = n - edf > 0.5 ? static_cast<double>(n) * rss / ((n - edf) * (n - edf)) : std::numeric_limits<double>::infinity();
+    out.gcv = n - edf > 0.5 ? static_cast<double>(n) * rss / ((n - edf) * (n - edf))
+                            : std::numeric_limits<double>::infinity();
     out.spline.order = 4;
     out.spline.knots = basis.knots;
     out.spline.coefficients.assign(c.data(), c.data() + m);
@@ -401,8 +403,9 @@ FitResult fit_filtered_drag(const std::vector<FilteredFile>& files, const FitOpt
   if (used < 4)
     throw InputError(file_list(files) + ": too few phi bins to fit: " + std::to_string(used) + " of " +
                      std::to_string(R.bins.size()) + " bins have >= " + std::to_string(o.min_count) +
-                     " samples at >= " + std::to_string(o.min_widths) + " widths above phi_crit = " +
-                     std::to_string(o.phi_crit) + "; at least 4 needed (lower --min-count or filter longer runs)");
+                     " samples at >= " + std::to_string(o.min_widths) +
+                     " widths above phi_crit = " + std::to_string(o.phi_crit) +
+                     "; at least 4 needed (lower --min-count or filter longer runs)");
   R.breakpoints = o.breakpoints > 0 ? o.breakpoints : std::clamp(used / 2 + 2, 5, 15);
   const Curves main = fit_curves(R.bins, o.phi_crit, phi_max, R.breakpoints, -1, -1);
   R.lambda_h = main.h.lambda;
@@ -419,7 +422,9 @@ FitResult fit_filtered_drag(const std::vector<FilteredFile>& files, const FitOpt
 
   DragModel& M = R.model;
   const Physics& p = first.physics;
-  M.base_law = p.micro_drag == "wen-yu" ? DragLaw::WenYu : p.micro_drag == "stokes" ? DragLaw::Stokes : DragLaw::Beetstra;
+  M.base_law = p.micro_drag == "wen-yu"   ? DragLaw::WenYu
+               : p.micro_drag == "stokes" ? DragLaw::Stokes
+                                          : DragLaw::Beetstra;
   M.u_t_convention = kUtConvention;
   M.u_t_m_s = p.u_t_m_s;
   M.l_char_m = p.l_char_m;
@@ -457,7 +462,8 @@ FitResult fit_filtered_drag(const std::vector<FilteredFile>& files, const FitOpt
   const std::size_t nphi = R.band_phi.size(), nF = R.band_F.size();
   R.h_low = R.h_high = R.a_low = R.a_high = std::vector<double>(nphi, kNaN);
   R.H_low = R.H_high = std::vector<double>(nphi * nF, kNaN);
-  const bool blocks = std::all_of(files.begin(), files.end(), [](const FilteredFile& f) { return f.has_per_snapshot; });
+  const bool blocks =
+      std::all_of(files.begin(), files.end(), [](const FilteredFile& f) { return f.has_per_snapshot; });
   R.resampling = blocks ? "snapshot blocks" : "normal intervals";
   if (o.bootstrap > 0) {
     std::unique_ptr<gsl_rng, decltype(&gsl_rng_free)> rng(gsl_rng_alloc(gsl_rng_mt19937), &gsl_rng_free);
@@ -560,9 +566,10 @@ FitResult fit_filtered_drag(const std::vector<FilteredFile>& files, const FitOpt
     double sum = 0, sum_z = 0, sum_z2 = 0, sum_s = 0;
     for (std::size_t b = 0; b < s.H.size(); ++b) {
       const BinEstimate& e = R.bins[b];
-      const bool ok = s.whole_box ? (s.count[b] >= static_cast<double>(o.min_count) && std::isfinite(s.H[b]) &&
-                                     std::isfinite(s.sigma[b]) && s.sigma[b] > 0 && e.phi >= o.phi_crit)
-                                  : (e.used && usable(s, b, static_cast<double>(o.min_count)));
+      const bool ok = s.whole_box
+                          ? (s.count[b] >= static_cast<double>(o.min_count) && std::isfinite(s.H[b]) &&
+                             std::isfinite(s.sigma[b]) && s.sigma[b] > 0 && e.phi >= o.phi_crit)
+                          : (e.used && usable(s, b, static_cast<double>(o.min_count)));
       if (!ok) continue;
       const double smooth = curves.h(e.phi) / (1.0 + curves.a(e.phi) * s.F);
       const double model = s.whole_box ? smooth : e.h / (1.0 + std::exp(e.log_a) * s.F);
@@ -608,7 +615,8 @@ FitResult fit_filtered_drag(const std::vector<FilteredFile>& files, const FitOpt
       }
       std::vector<Series> tr = observe(files, &train);
       if (run < 0)  // file without per-snapshot sums: leave the whole file out
-        tr.erase(std::remove_if(tr.begin(), tr.end(), [&](const Series& s) { return s.file == f; }), tr.end());
+        tr.erase(std::remove_if(tr.begin(), tr.end(), [&](const Series& s) { return s.file == f; }),
+                 tr.end());
       CrossValidationRun cv;
       cv.file = files[f].path;
       cv.run = run;
@@ -640,7 +648,8 @@ FitResult fit_filtered_drag(const std::vector<FilteredFile>& files, const FitOpt
         if (s.whole_box) continue;
         for (std::size_t b = 0; b < s.H.size(); ++b) {
           const BinEstimate& e = R.bins[b];
-          if (!e.used || !(s.count[b] >= static_cast<double>(o.min_count)) || !std::isfinite(s.H[b])) continue;
+          if (!e.used || !(s.count[b] >= static_cast<double>(o.min_count)) || !std::isfinite(s.H[b]))
+            continue;
           const double r = s.H[b] - hc.h(e.phi) / (1.0 + hc.a(e.phi) * s.F);
           const double r_in = s.H[b] - curves.h(e.phi) / (1.0 + curves.a(e.phi) * s.F);
           s1 += r;

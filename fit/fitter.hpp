@@ -30,10 +30,10 @@
 namespace cgd::fit {
 
 struct FitOptions {
-  double phi_crit = 0.016;     // below it h -> 0 linearly (Radl & Sundaresan 2014)
+  double phi_crit = 0.016;       // below it h -> 0 linearly (Radl & Sundaresan 2014)
   std::int64_t min_count = 100;  // particle samples a (width, bin) needs to be used
-  int min_widths = 3;          // distinct widths a bin needs (2 parameters + 1 degree of freedom)
-  int bootstrap = 400;         // replicates (0: no bands)
+  int min_widths = 3;            // distinct widths a bin needs (2 parameters + 1 degree of freedom)
+  int bootstrap = 400;           // replicates (0: no bands)
   std::uint64_t seed = 1;
   int breakpoints = 0;         // spline breakpoints (0: from the number of bins, 5..15)
   double h_max = 0.99;         // upper clamp of h (beta_bar > 0)
@@ -42,11 +42,11 @@ struct FitOptions {
 
 /// The per-bin estimate of step 1.
 struct BinEstimate {
-  double phi = 0;              // count-weighted mean phi of the bin's samples
+  double phi = 0;  // count-weighted mean phi of the bin's samples
   double phi_center = 0;
-  bool used = false;           // fitted and passed to the splines
-  std::string dropped;         // why not ("" when used)
-  int widths = 0;              // points in the fit
+  bool used = false;    // fitted and passed to the splines
+  std::string dropped;  // why not ("" when used)
+  int widths = 0;       // points in the fit
   double h = 0, log_a = 0, se_h = 0, se_log_a = 0, chi2 = 0;
 };
 
@@ -56,31 +56,31 @@ struct WidthResiduals {
   double F = 0;
   bool whole_box = false;
   int points = 0;
-  double mean = 0;             // mean of H - H_model (per-bin fits; for the whole box the smoothed model)
+  double mean = 0;               // mean of H - H_model (per-bin fits; for the whole box the smoothed model)
   double mean_z = 0, rms_z = 0;  // of (H - H_model)/sigma
-  double mean_smoothed = 0;    // mean of H - H_model with the smoothed h(phi), a(phi)
+  double mean_smoothed = 0;      // mean of H - H_model with the smoothed h(phi), a(phi)
 };
 
 struct CrossValidationRun {
   std::string file;
   std::int64_t run = 0;
   int points = 0;
-  double rms = 0, mean = 0;    // of H_run - H_model(fit without this run)
+  double rms = 0, mean = 0;  // of H_run - H_model(fit without this run)
 };
 
 struct FitResult {
-  DragModel model;             // splines, phi_crit, h_max, physics, c_corr (paper values)
+  DragModel model;  // splines, phi_crit, h_max, physics, c_corr (paper values)
   std::vector<BinEstimate> bins;
   double lambda_h = 0, lambda_log_a = 0, edf_h = 0, edf_log_a = 0;
   int breakpoints = 0;
-  double chi2_per_dof = 0;     // of the per-bin fits, pooled
-  int h_clamped = 0;           // band grid points where the raw h spline left [0, h_max]
+  double chi2_per_dof = 0;  // of the per-bin fits, pooled
+  int h_clamped = 0;        // band grid points where the raw h spline left [0, h_max]
   // bands (step 3) on a grid
   std::vector<double> band_phi, h, h_low, h_high, a, a_low, a_high;
-  std::vector<double> band_F;                  // F of every width in the data, ascending
-  std::vector<double> H, H_low, H_high;        // band_F.size() x band_phi.size(), row-major
+  std::vector<double> band_F;            // F of every width in the data, ascending
+  std::vector<double> H, H_low, H_high;  // band_F.size() x band_phi.size(), row-major
   int replicates = 0;
-  std::string resampling;                      // "snapshot blocks" or "normal intervals" (no per-snapshot sums)
+  std::string resampling;  // "snapshot blocks" or "normal intervals" (no per-snapshot sums)
   std::vector<WidthResiduals> residuals;
   std::vector<CrossValidationRun> cv_runs;
   double cv_rms = NAN, cv_in_sample_rms = NAN;
@@ -90,14 +90,16 @@ struct FitResult {
 /// Runs steps 1-4 on `files` (already checked with check_same_physics). InputError when too few
 /// widths or bins remain to fit, naming the files and the threshold. Progress lines go to `log`
 /// when given.
-FitResult fit_filtered_drag(const std::vector<FilteredFile>& files, const FitOptions& options, std::ostream* log);
+FitResult fit_filtered_drag(const std::vector<FilteredFile>& files, const FitOptions& options,
+                            std::ostream* log);
 
 /// The fit report (a page a researcher can judge in a minute), with Radl 2014 beside the fit.
-std::string fit_report(const FitResult& result, const std::vector<FilteredFile>& files, const FitOptions& options);
+std::string fit_report(const FitResult& result, const std::vector<FilteredFile>& files,
+                       const FitOptions& options);
 
 /// Write the model file (docs/schema-drag-model.md) atomically; `scene` supplies the common root
 /// attributes and /params (the first filtered file's scene).
-void write_model_file(const std::string& path, const FitResult& result, const std::vector<FilteredFile>& files,
-                      const FitOptions& options, const Scene& scene);
+void write_model_file(const std::string& path, const FitResult& result,
+                      const std::vector<FilteredFile>& files, const FitOptions& options, const Scene& scene);
 
 }  // namespace cgd::fit

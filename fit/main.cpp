@@ -21,9 +21,10 @@ int main(int argc, char** argv) {
     std::string output;
     bool quiet = false;
     cgd::fit::FitOptions options;
-    CLI::App app{"Fit the filtered drag model H(F, phi) = h(phi)/(1 + a(phi) F) to filtered files (cgd-filter) "
-                 "and write a drag model file (docs/fit.md)",
-                 "cgd-fit"};
+    CLI::App app{
+        "Fit the filtered drag model H(F, phi) = h(phi)/(1 + a(phi) F) to filtered files (cgd-filter) "
+        "and write a drag model file (docs/fit.md)",
+        "cgd-fit"};
     app.add_option("filtered", inputs, "Filtered files (cgd-filter), pooled into one fit")
         ->required()
         ->type_name("FILTERED.h5...");
@@ -33,15 +34,18 @@ int main(int argc, char** argv) {
         ->check(CLI::PositiveNumber);
     app.add_option("--min-widths", options.min_widths, "Distinct widths a bin needs (default 3, at least 3)")
         ->check(CLI::Range(3, 1000));
-    app.add_option("--bootstrap", options.bootstrap, "Bootstrap replicates for the bands (default 400; 0: none)")
+    app.add_option("--bootstrap", options.bootstrap,
+                   "Bootstrap replicates for the bands (default 400; 0: none)")
         ->check(CLI::Range(0, 100000));
     app.add_option("--seed", options.seed, "Seed of the bootstrap (default 1)");
     app.add_option("--phi-crit", options.phi_crit, "Below it h -> 0 linearly (default 0.016, the paper's)")
         ->check(CLI::Range(1e-6, 0.5));
-    app.add_option("--breakpoints", options.breakpoints, "Spline breakpoints (default: from the bin count, 5..15)")
+    app.add_option("--breakpoints", options.breakpoints,
+                   "Spline breakpoints (default: from the bin count, 5..15)")
         ->check(CLI::Range(4, 100));
-    app.add_flag("--no-cross-validation", [&](std::int64_t) { options.cross_validate = false; },
-                 "Skip the leave-one-run-out cross-validation");
+    app.add_flag(
+        "--no-cross-validation", [&](std::int64_t) { options.cross_validate = false; },
+        "Skip the leave-one-run-out cross-validation");
     app.add_flag("--quiet", quiet, "Print no report");
     cgd::parse_command_line(app, argc, argv, "cgd-fit");
 
@@ -49,7 +53,8 @@ int main(int argc, char** argv) {
     std::vector<cgd::fit::FilteredFile> files;
     for (const std::string& path : inputs) files.push_back(cgd::fit::read_filtered_file(path));
     cgd::fit::check_same_physics(files);
-    const cgd::Scene scene = cgd::load_scene_from_string(files.front().scene_toml, files.front().path + " (scene)");
+    const cgd::Scene scene =
+        cgd::load_scene_from_string(files.front().scene_toml, files.front().path + " (scene)");
     const std::filesystem::path parent = std::filesystem::absolute(output).parent_path();
     if (!std::filesystem::is_directory(parent))
       throw cgd::InputError(output + ": cannot write the model file: no directory " + parent.string());

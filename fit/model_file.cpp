@@ -36,9 +36,10 @@ void write_model_file(const std::string& path, const FitResult& R, const std::ve
   const DragModel& M = R.model;
   h5::write_atomically(path, MPI_COMM_SELF, [&](h5::File& f) {
     schema::write_common(f, "drag_model", scene);
-    f.set_attr("/", "model_form",
-               std::string("beta_bar/beta_micro = c_corr(alpha) [1 - h(phi)/(1 + a(phi) F)], F = l_char_m / Delta, "
-                           "Delta = cube root of the fluid cell volume (Radl & Sundaresan 2014)"));
+    f.set_attr(
+        "/", "model_form",
+        std::string("beta_bar/beta_micro = c_corr(alpha) [1 - h(phi)/(1 + a(phi) F)], F = l_char_m / Delta, "
+                    "Delta = cube root of the fluid cell volume (Radl & Sundaresan 2014)"));
     f.set_attr("/", "base_drag", std::string(to_string(M.base_law)));
     f.set_attr("/", "u_t_convention", M.u_t_convention);
     f.set_attr("/", "u_t_m_s", M.u_t_m_s);
@@ -51,9 +52,10 @@ void write_model_file(const std::string& path, const FitResult& R, const std::ve
     f.set_attr("/", "fluid_density_kg_m3", M.fluid_density_kg_m3);
     f.set_attr("/", "fluid_viscosity_Pa_s", M.fluid_viscosity_Pa_s);
     f.set_attr("/", "gravity_m_s2", M.gravity_m_s2);
-    write_spline(f, "/h", M.h_spline,
-                 "S_h(phi); h = clip(S_h(phi), 0, h_max) on [phi_crit, phi_max], h(phi_crit) phi/phi_crit below, "
-                 "h(phi_max) above");
+    write_spline(
+        f, "/h", M.h_spline,
+        "S_h(phi); h = clip(S_h(phi), 0, h_max) on [phi_crit, phi_max], h(phi_crit) phi/phi_crit below, "
+        "h(phi_max) above");
     write_spline(f, "/log_a", M.log_a_spline,
                  "S(phi) = log a(phi); a = exp(S(clip(phi, phi_crit, phi_max)))");
     f.create_group("/c_corr");
@@ -70,8 +72,13 @@ void write_model_file(const std::string& path, const FitResult& R, const std::ve
     f.set_attr("/bands", "confidence", 0.95);
     f.set_attr("/bands", "resampling", R.resampling);
     for (const auto& [name, v] : {std::pair<const char*, const std::vector<double>*>{"phi", &R.band_phi},
-                                  {"h", &R.h}, {"h_low", &R.h_low}, {"h_high", &R.h_high}, {"a", &R.a},
-                                  {"a_low", &R.a_low}, {"a_high", &R.a_high}, {"F", &R.band_F}})
+                                  {"h", &R.h},
+                                  {"h_low", &R.h_low},
+                                  {"h_high", &R.h_high},
+                                  {"a", &R.a},
+                                  {"a_low", &R.a_low},
+                                  {"a_high", &R.a_high},
+                                  {"F", &R.band_F}})
       write_vector(f, std::string("/bands/") + name, *v);
     const std::vector<std::uint64_t> dims{R.band_F.size(), R.band_phi.size()};
     f.write_replicated("/bands/H", R.H, dims);
@@ -94,8 +101,12 @@ void write_model_file(const std::string& path, const FitResult& R, const std::ve
       widths.push_back(b.widths);
     }
     for (const auto& [name, v] : {std::pair<const char*, const std::vector<double>*>{"phi", &phi},
-                                  {"phi_center", &center}, {"h", &h}, {"h_stderr", &se_h}, {"a", &a},
-                                  {"log_a_stderr", &se_log_a}, {"chi2", &chi2}})
+                                  {"phi_center", &center},
+                                  {"h", &h},
+                                  {"h_stderr", &se_h},
+                                  {"a", &a},
+                                  {"log_a_stderr", &se_log_a},
+                                  {"chi2", &chi2}})
       write_vector(f, std::string("/bins/") + name, *v);
     f.write_replicated("/bins/used", used, {used.size()});
     f.write_replicated("/bins/widths", widths, {widths.size()});
@@ -165,8 +176,9 @@ std::string fit_report(const FitResult& R, const std::vector<FilteredFile>& file
   std::ostringstream out;
   const SplineCurves curves{&R.model};
   const Radl2014Curves radl;
-  out << "cgd-fit: H(F, phi) = h(phi)/(1 + a(phi) F), F = L_char/Delta; " << files.size() << " filtered file(s), base law "
-      << to_string(R.model.base_law) << ", L_char = " << format("%.4g", R.model.l_char_m) << " m\n";
+  out << "cgd-fit: H(F, phi) = h(phi)/(1 + a(phi) F), F = L_char/Delta; " << files.size()
+      << " filtered file(s), base law " << to_string(R.model.base_law)
+      << ", L_char = " << format("%.4g", R.model.l_char_m) << " m\n";
   int used = 0, dropped = 0;
   for (const BinEstimate& b : R.bins) (b.used ? used : dropped)++;
   out << "bins: " << used << " fitted, " << dropped << " dropped (a bin needs >= " << o.min_count
@@ -188,8 +200,10 @@ std::string fit_report(const FitResult& R, const std::vector<FilteredFile>& file
   out << "per-bin fits: chi2/dof = " << format("%.2f", R.chi2_per_dof)
       << " (about 1 when 1/(1 + aF) describes the width dependence within the filter's intervals)\n";
   out << "splines: " << R.breakpoints << " breakpoints, GCV smoothing: edf(h) = " << format("%.1f", R.edf_h)
-      << ", edf(log a) = " << format("%.1f", R.edf_log_a) << "; h clamped at " << R.h_clamped << " grid points\n";
-  out << "bands: " << R.replicates << " bootstrap replicates over " << R.resampling << ", 95 % percentile\n\n";
+      << ", edf(log a) = " << format("%.1f", R.edf_log_a) << "; h clamped at " << R.h_clamped
+      << " grid points\n";
+  out << "bands: " << R.replicates << " bootstrap replicates over " << R.resampling
+      << ", 95 % percentile\n\n";
   out << "   phi   h fit [95% band]         h Radl2014   a fit [95% band]         a Radl2014\n";
   for (double phi : {0.01, 0.02, 0.05, 0.1, 0.15, 0.2, 0.25, 0.3, 0.35, 0.4, 0.45, 0.5}) {
     if (phi > R.band_phi.back() + 1e-12) break;
@@ -198,25 +212,26 @@ std::string fit_report(const FitResult& R, const std::vector<FilteredFile>& file
     for (std::size_t k = 0; k < R.band_phi.size(); ++k)
       if (std::abs(R.band_phi[k] - phi) < std::abs(R.band_phi[i] - phi)) i = k;
     out << format("%6.3f", phi) << format("  %6.3f", curves.h(phi)) << format(" [%6.3f,", R.h_low[i])
-        << format("%6.3f]", R.h_high[i]) << format("     %6.3f", radl.h(phi)) << format("     %7.3f", curves.a(phi))
-        << format(" [%7.3f,", R.a_low[i]) << format("%7.3f]", R.a_high[i]) << format("   %7.3f", radl.a(phi)) << "\n";
+        << format("%6.3f]", R.h_high[i]) << format("     %6.3f", radl.h(phi))
+        << format("     %7.3f", curves.a(phi)) << format(" [%7.3f,", R.a_low[i])
+        << format("%7.3f]", R.a_high[i]) << format("   %7.3f", radl.a(phi)) << "\n";
   }
   out << "\nresiduals per width (H - h_bin/(1 + a_bin F), per-bin fits; z = residual/sigma):\n";
   out << "  file : group          F     points  mean      mean z   rms z   mean (smoothed model)\n";
   for (const WidthResiduals& w : R.residuals)
     out << "  " << w.file << " : " << w.group << format("  %7.4f", w.F) << format("  %4.0f", double(w.points))
         << format("  %+8.4f", w.mean) << format("  %+6.2f", w.mean_z) << format("  %6.2f", w.rms_z)
-        << format("  %+8.4f", w.mean_smoothed) << (w.whole_box ? "   (whole box: smoothed model, not fitted)" : "")
-        << "\n";
+        << format("  %+8.4f", w.mean_smoothed)
+        << (w.whole_box ? "   (whole box: smoothed model, not fitted)" : "") << "\n";
   out << "  (a trend of mean z with F would mean 1/(1 + aF) is biased at the smallest or largest widths)\n";
   if (R.cv_runs.empty()) {
     out << "\nleave-one-run-out cross-validation: not possible (one run)\n";
   } else {
-    out << "\nleave-one-run-out cross-validation of H: rms " << format("%.4f", R.cv_rms) << " (in-sample rms on the same points "
-        << format("%.4f", R.cv_in_sample_rms) << ")\n";
+    out << "\nleave-one-run-out cross-validation of H: rms " << format("%.4f", R.cv_rms)
+        << " (in-sample rms on the same points " << format("%.4f", R.cv_in_sample_rms) << ")\n";
     for (const CrossValidationRun& c : R.cv_runs)
-      out << "  " << c.file << " run " << c.run << ": " << c.points << " points, rms " << format("%.4f", c.rms)
-          << ", mean " << format("%+.4f", c.mean) << "\n";
+      out << "  " << c.file << " run " << c.run << ": " << c.points << " points, rms "
+          << format("%.4f", c.rms) << ", mean " << format("%+.4f", c.mean) << "\n";
   }
   out << "\nc_corr: a = " << R.model.c_corr_a << ", k = " << R.model.c_corr_k << " (" << R.model.c_corr_source
       << " values, until the parcel fit of the coarse stage replaces them)\n";

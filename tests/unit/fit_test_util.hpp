@@ -14,8 +14,12 @@
 namespace cgd::fit::testing {
 
 /// Truth: h(phi) = 0.93 (1 - exp(-phi/0.07)) (1 - (phi/0.64)^4), a(phi) = 1.5 + 4 exp(-phi/0.12).
-inline double truth_h(double phi) { return 0.93 * (1 - std::exp(-phi / 0.07)) * (1 - std::pow(phi / 0.64, 4)); }
-inline double truth_a(double phi) { return 1.5 + 4 * std::exp(-phi / 0.12); }
+inline double truth_h(double phi) {
+  return 0.93 * (1 - std::exp(-phi / 0.07)) * (1 - std::pow(phi / 0.64, 4));
+}
+inline double truth_a(double phi) {
+  return 1.5 + 4 * std::exp(-phi / 0.12);
+}
 
 struct SyntheticSpec {
   int bins = 20;
@@ -82,7 +86,8 @@ inline FilteredFile make_synthetic(const SyntheticSpec& s) {
       const double phi = 0.5 * (f.phi_edges[b] + f.phi_edges[b + 1]);
       const double H_true = truth_h(phi) / (1 + truth_a(phi) * Fs[w]);
       double num = 0, micro = 0;
-      std::vector<double> block_num(static_cast<std::size_t>(s.runs * blocks_per_run)), block_micro(block_num.size());
+      std::vector<double> block_num(static_cast<std::size_t>(s.runs * blocks_per_run)),
+          block_micro(block_num.size());
       for (int k = 0; k < ns; ++k) {
         const std::size_t i = static_cast<std::size_t>(k * nb + b);
         const double e = s.noise * (0.6 * common[i] + 0.8 * own[i]);
@@ -96,7 +101,8 @@ inline FilteredFile make_synthetic(const SyntheticSpec& s) {
       double mean = 0, var = 0;
       const double nblk = static_cast<double>(block_num.size());
       for (std::size_t j = 0; j < block_num.size(); ++j) mean += (1 - block_num[j] / block_micro[j]) / nblk;
-      for (std::size_t j = 0; j < block_num.size(); ++j) var += std::pow(1 - block_num[j] / block_micro[j] - mean, 2);
+      for (std::size_t j = 0; j < block_num.size(); ++j)
+        var += std::pow(1 - block_num[j] / block_micro[j] - mean, 2);
       const double se = std::sqrt(var / (nblk - 1) / nblk);
       ws.H.push_back(H);
       ws.H_low.push_back(H - 1.959963984540054 * se);

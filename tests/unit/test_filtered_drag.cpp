@@ -111,12 +111,19 @@ TEST(Radl2014, CoefficientsAreThoseOfTheReferenceCsv) {
 TEST(Radl2014, PublishedValuesAtTheBreakpoints) {
   const Radl2014Curves radl;
   const std::pair<double, double> a_ref[] = {
-      {0, 21.51},       {0.0159999999, 21.51},         {0.016, 2.464740352}, {0.0999999999, 4.6260999995308},
-      {0.10, 4.63},     {0.18, 3.52},                  {0.25, 2.68},         {0.3999999999, 1.7851637500583725},
-      {0.40, 1.79},     {0.55, 1.79}};
-  const std::pair<double, double> h_ref[] = {
-      {0.0299999999, 0.239099999203}, {0.03, 0.239}, {0.08, 0.492}, {0.12, 0.739}, {0.18, 0.887},
-      {0.34, 0.943}, {0.48, 0.85}, {0.55, 0.68}, {0.5999999999, 2.485999997748e-9}, {0.60, 0.0}};
+      {0, 21.51},   {0.0159999999, 21.51}, {0.016, 2.464740352}, {0.0999999999, 4.6260999995308},
+      {0.10, 4.63}, {0.18, 3.52},          {0.25, 2.68},         {0.3999999999, 1.7851637500583725},
+      {0.40, 1.79}, {0.55, 1.79}};
+  const std::pair<double, double> h_ref[] = {{0.0299999999, 0.239099999203},
+                                             {0.03, 0.239},
+                                             {0.08, 0.492},
+                                             {0.12, 0.739},
+                                             {0.18, 0.887},
+                                             {0.34, 0.943},
+                                             {0.48, 0.85},
+                                             {0.55, 0.68},
+                                             {0.5999999999, 2.485999997748e-9},
+                                             {0.60, 0.0}};
   for (const auto& [phi, a] : a_ref) EXPECT_NEAR(radl.a(phi), a, 1e-12 * a) << "a at " << phi;
   // h near 0.60 is a difference of O(1) terms (0.68 - 0.117 - 0.563): absolute 1e-13
   for (const auto& [phi, h] : h_ref) EXPECT_NEAR(radl.h(phi), h, 1e-13) << "h at " << phi;
@@ -316,7 +323,8 @@ void expect_input_error(const std::function<void()>& f, const std::vector<std::s
     f();
     ADD_FAILURE() << "no InputError";
   } catch (const cgd::InputError& e) {
-    for (const auto& w : words) EXPECT_NE(std::string(e.what()).find(w), std::string::npos) << e.what() << " lacks " << w;
+    for (const auto& w : words)
+      EXPECT_NE(std::string(e.what()).find(w), std::string::npos) << e.what() << " lacks " << w;
   }
 }
 
@@ -338,10 +346,12 @@ TEST(DragModelFile, RefusesMissingForeignAndOtherSystems) {
   expect_input_error([&] { cgd::check_model_matches_scene(m, scene_with({})); },
                      {other, "filtered_test.toml", "particles.diameter", "diameter_m"});
   // another viscosity
-  expect_input_error([&] { cgd::check_model_matches_scene(cgd::load_drag_model((dir / "other.h5").string()),
-                                                          scene_with({"particles.diameter=100e-6",
-                                                                      "fluid.viscosity=2e-5"})); },
-                     {"fluid.viscosity"});
+  expect_input_error(
+      [&] {
+        cgd::check_model_matches_scene(cgd::load_drag_model((dir / "other.h5").string()),
+                                       scene_with({"particles.diameter=100e-6", "fluid.viscosity=2e-5"}));
+      },
+      {"fluid.viscosity"});
 }
 
 // ---- the scene key ------------------------------------------------------------------------------------
@@ -351,9 +361,13 @@ TEST(FilteredDragScene, DragModelKeyValidatedAndChecksumRecorded) {
   const std::string path = (dir / "model.h5").string();
   write_model(path, line_model());
   expect_input_error([&] { scene_with({"fluid.drag=\"model\""}); }, {"fluid.drag_model is missing"});
-  expect_input_error([&] { scene_with({"fluid.drag_model=\"" + path + "\""}); }, {"fluid.drag_model", "beetstra"});
-  expect_input_error([&] { scene_with({"fluid.drag=\"model\"", "fluid.drag_model=\"" + path + "x\""}); },
-                     {"fluid.drag_model", "no such file"});
+  expect_input_error([&] { scene_with({"fluid.drag_model=\"" + path + "\""}); },
+                     {"fluid.drag_model", "beetstra"});
+  expect_input_error(
+      [&] {
+        scene_with({"fluid.drag=\"model\"", "fluid.drag_model=\"" + path + "x\""});
+      },
+      {"fluid.drag_model", "no such file"});
   const cgd::Scene s = scene_with({"fluid.drag=\"model\"", "fluid.drag_model=\"" + path + "\""});
   const std::string sum = cgd::file_checksum_fnv1a(path);
   EXPECT_EQ(s.fluid->drag_model_checksum, sum);
@@ -361,7 +375,10 @@ TEST(FilteredDragScene, DragModelKeyValidatedAndChecksumRecorded) {
   // the effective scene reloads; a pinned checksum that no longer matches is refused
   EXPECT_NO_THROW(cgd::load_scene_from_string(s.effective_toml, "again.toml"));
   expect_input_error(
-      [&] { scene_with({"fluid.drag=\"model\"", "fluid.drag_model=\"" + path + "\"", "fluid.drag_model_checksum=\"0\""}); },
+      [&] {
+        scene_with(
+            {"fluid.drag=\"model\"", "fluid.drag_model=\"" + path + "\"", "fluid.drag_model_checksum=\"0\""});
+      },
       {"fluid.drag_model_checksum", "changed"});
 }
 
@@ -400,19 +417,24 @@ TEST(FilteredDragEngine, HomogeneousSuspensionMatchesFilteredBalance) {
     std::vector<std::string> overrides;
     double phi;
   };
-  const Case cases[] = {{{"fluid.drag=\"radl2014\"", "particles.solids_fraction=0.1"}, 0.1},
-                        {{"fluid.drag=\"radl2014\"", "particles.solids_fraction=0.3"}, 0.3},
-                        {{"fluid.drag=\"model\"", "fluid.drag_model=\"" + model_path + "\"", "particles.solids_fraction=0.1"}, 0.1}};
+  const Case cases[] = {
+      {{"fluid.drag=\"radl2014\"", "particles.solids_fraction=0.1"}, 0.1},
+      {{"fluid.drag=\"radl2014\"", "particles.solids_fraction=0.3"}, 0.3},
+      {{"fluid.drag=\"model\"", "fluid.drag_model=\"" + model_path + "\"", "particles.solids_fraction=0.1"},
+       0.1}};
   for (const Case& c : cases) {
     const cgd::Scene scene = scene_with(c.overrides);
     const double u_t = scene.derived.u_t_m_s;
     const double phi = static_cast<double>(scene.derived.particle_count) * scene.derived.particle_volume_m3 /
                        (scene.domain.size_m[0] * scene.domain.size_m[1] * scene.domain.size_m[2]);
-    const cgd::Vec3 spacing{scene.domain.size_m[0] / 4, scene.domain.size_m[1] / 4, scene.domain.size_m[2] / 4};
+    const cgd::Vec3 spacing{scene.domain.size_m[0] / 4, scene.domain.size_m[1] / 4,
+                            scene.domain.size_m[2] / 4};
     const cgd::FilteredDragSetup setup = cgd::filtered_drag_setup(scene, spacing);
-    const double expected = cgd::visit_any_drag_law(scene.fluid->drag, kAir, setup, [&](const auto& law) {
-      return cgd::homogeneous_slip_speed(law, phi, 1500.0, 9.81);
-    }) / u_t;
+    const double expected =
+        cgd::visit_any_drag_law(
+            scene.fluid->drag, kAir, setup,
+            [&](const auto& law) { return cgd::homogeneous_slip_speed(law, phi, 1500.0, 9.81); }) /
+        u_t;
     const double micro = cgd::homogeneous_slip_speed(BeetstraDrag(kAir), phi, 1500.0, 9.81) / u_t;
     TempDir run_dir;
     const fs::path run = run_quietly(scene, run_dir);
@@ -424,8 +446,10 @@ TEST(FilteredDragEngine, HomogeneousSuspensionMatchesFilteredBalance) {
     for (std::size_t i = 0; i < t.size(); ++i)
       if (t[i] >= 0.005) sum += slip[3 * i + 1], ++n;
     const double mean = std::abs(sum / n) / u_t;
-    std::printf("[ filtered suspension ] %s phi %.3f: <slip_y>/u_t %.4f, filtered balance %.4f (%+.2f %%), Beetstra %.4f\n",
-                cgd::to_string(scene.fluid->drag), phi, mean, expected, 100 * (mean / expected - 1), micro);
+    std::printf(
+        "[ filtered suspension ] %s phi %.3f: <slip_y>/u_t %.4f, filtered balance %.4f (%+.2f %%), Beetstra "
+        "%.4f\n",
+        cgd::to_string(scene.fluid->drag), phi, mean, expected, 100 * (mean / expected - 1), micro);
     EXPECT_NEAR(mean / expected, 1.0, 0.02) << cgd::to_string(scene.fluid->drag) << " phi " << phi;
     EXPECT_GT(std::abs(mean / micro - 1.0), 0.03) << "indistinguishable from the base law";
     // the effective scene in the run's files records the model file's checksum

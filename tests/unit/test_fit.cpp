@@ -60,7 +60,8 @@ TEST(Fit, RecoversKnownMasterCurves) {
     worst_h = std::max(worst_h, std::abs(c.h(phi) - truth_h(phi)));
     worst_a = std::max(worst_a, std::abs(c.a(phi) / truth_a(phi) - 1));
   }
-  std::printf("[ fit recovery ] noise 0.01: max |h - h_true| %.4f, max |a/a_true - 1| %.4f\n", worst_h, worst_a);
+  std::printf("[ fit recovery ] noise 0.01: max |h - h_true| %.4f, max |a/a_true - 1| %.4f\n", worst_h,
+              worst_a);
   EXPECT_LT(worst_h, 0.01);
   EXPECT_LT(worst_a, 0.05);
   for (const auto& b : r.bins) {
@@ -96,7 +97,8 @@ TEST(Fit, BandsCoverTheTruthAtAboutTheNominalRate) {
     }
   }
   const double cov_h = double(inside_h) / total, cov_a = double(inside_a) / total;
-  std::printf("[ fit bands ] coverage of the truth by the 95 %% bands: h %.3f, a %.3f (%d points)\n", cov_h, cov_a, total);
+  std::printf("[ fit bands ] coverage of the truth by the 95 %% bands: h %.3f, a %.3f (%d points)\n", cov_h,
+              cov_a, total);
   EXPECT_GE(cov_h, 0.85);
   EXPECT_LE(cov_h, 0.995);
   EXPECT_GE(cov_a, 0.85);
@@ -126,24 +128,25 @@ TEST(Fit, ErrorShrinksWithTheNoise) {
   };
   const auto [h_big, a_big] = rms_error(0.1);
   const auto [h_small, a_small] = rms_error(0.025);
-  std::printf("[ fit noise ] rms error of h: %.4f (noise 0.1) -> %.4f (0.025); of log a: %.4f -> %.4f\n", h_big,
-              h_small, a_big, a_small);
+  std::printf("[ fit noise ] rms error of h: %.4f (noise 0.1) -> %.4f (0.025); of log a: %.4f -> %.4f\n",
+              h_big, h_small, a_big, a_small);
   EXPECT_GT(h_big / h_small, 2.0);
   EXPECT_GT(a_big / a_small, 2.0);
 }
 
 // Leave-one-run-out: the held-out runs' H are predicted about as well as the noise allows. One run's
 // H per (width, bin) has sd ~ noise / sqrt(n_eff) = 0.1 / sqrt(100/3) = 0.017 (AR(1) 0.5: tau = 3); the
-// CV rms adds the model's own error: it must be within 0.9..1.6x of that (below: impossible; far above: the fit does not generalise), and above the in-sample
-// rms on the same points. The per-width residuals of the per-bin fits have mean z near 0 (|.| < 0.5: the
-// form is exact in the synthetic data).
+// CV rms adds the model's own error: it must be within 0.9..1.6x of that (below: impossible; far above: the
+// fit does not generalise), and above the in-sample rms on the same points. The per-width residuals of the
+// per-bin fits have mean z near 0 (|.| < 0.5: the form is exact in the synthetic data).
 TEST(Fit, CrossValidationAndResiduals) {
   SyntheticSpec s;
   s.runs = 3;
   const FitResult r = fit({make_synthetic(s)}, 0, true);
   ASSERT_EQ(r.cv_runs.size(), 3u);
   const double expected = 0.1 / std::sqrt(s.snapshots / 3.0);
-  std::printf("[ fit cv ] LORO rms %.4f (in-sample %.4f, one run's noise %.4f)\n", r.cv_rms, r.cv_in_sample_rms, expected);
+  std::printf("[ fit cv ] LORO rms %.4f (in-sample %.4f, one run's noise %.4f)\n", r.cv_rms,
+              r.cv_in_sample_rms, expected);
   EXPECT_GT(r.cv_rms, 0.9 * expected);
   EXPECT_LT(r.cv_rms, 1.6 * expected);
   EXPECT_GT(r.cv_rms, r.cv_in_sample_rms);
@@ -181,7 +184,8 @@ TEST(Fit, ResidualsRevealAWrongWidthDependence) {
     if (w.group == "/width_0") z_large_F = w.mean_z;  // F = 0.6
     if (w.group == "/width_5") z_small_F = w.mean_z;  // F = 0.1
   }
-  std::printf("[ fit residuals ] wrong form: mean z at F = 0.6: %+.2f, at F = 0.1: %+.2f\n", z_large_F, z_small_F);
+  std::printf("[ fit residuals ] wrong form: mean z at F = 0.6: %+.2f, at F = 0.1: %+.2f\n", z_large_F,
+              z_small_F);
   EXPECT_GT(std::abs(z_large_F - z_small_F), 1.0);
 }
 
@@ -190,14 +194,16 @@ void expect_input_error(const std::function<void()>& f, const std::vector<std::s
     f();
     ADD_FAILURE() << "no InputError";
   } catch (const cgd::InputError& e) {
-    for (const auto& w : words) EXPECT_NE(std::string(e.what()).find(w), std::string::npos) << e.what() << " lacks " << w;
+    for (const auto& w : words)
+      EXPECT_NE(std::string(e.what()).find(w), std::string::npos) << e.what() << " lacks " << w;
   }
 }
 
 TEST(FitBadInput, TooFewWidthsOrBins) {
   SyntheticSpec two;
   two.F = {0.6, 0.1};
-  expect_input_error([&] { fit({make_synthetic(two)}, 0); }, {"synthetic_1.h5", "too few filter widths", "2 distinct"});
+  expect_input_error([&] { fit({make_synthetic(two)}, 0); },
+                     {"synthetic_1.h5", "too few filter widths", "2 distinct"});
   SyntheticSpec sparse;
   sparse.count = 1;  // 1 sample per snapshot, 2 x 20 snapshots: 40 per bin and width < min_count = 100
   sparse.snapshots = 20;
@@ -209,24 +215,36 @@ TEST(FitBadInput, PoolingDifferentPhysicsIsRefused) {
   SyntheticSpec a, b;
   b.micro_drag = "wen-yu";
   b.seed = 2;
-  expect_input_error([&] { cgd::fit::check_same_physics({make_synthetic(a), make_synthetic(b)}); },
-                     {"synthetic_2.h5", "synthetic_1.h5", "different physics", "micro_drag"});
+  expect_input_error(
+      [&] {
+        cgd::fit::check_same_physics({make_synthetic(a), make_synthetic(b)});
+      },
+      {"synthetic_2.h5", "synthetic_1.h5", "different physics", "micro_drag"});
   SyntheticSpec c;
   c.diameter_m = 100e-6;
   c.seed = 3;
-  expect_input_error([&] { cgd::fit::check_same_physics({make_synthetic(a), make_synthetic(c)}); }, {"diameter_m"});
+  expect_input_error(
+      [&] {
+        cgd::fit::check_same_physics({make_synthetic(a), make_synthetic(c)});
+      },
+      {"diameter_m"});
   SyntheticSpec d;
   d.bins = 10;
   d.seed = 4;
-  expect_input_error([&] { cgd::fit::check_same_physics({make_synthetic(a), make_synthetic(d)}); }, {"phi_edges"});
+  expect_input_error(
+      [&] {
+        cgd::fit::check_same_physics({make_synthetic(a), make_synthetic(d)});
+      },
+      {"phi_edges"});
 }
 
 TEST(FitInput, FilteredFileRoundTripAndRefusals) {
   std::string pattern = (fs::temp_directory_path() / "cgd_fit_XXXXXX").string();
   ASSERT_TRUE(mkdtemp(pattern.data()));
   const fs::path dir = pattern;
-  const char* scene = "[domain]\nsize_dp = [12, 12, 12]\n[particles]\ndiameter = 75e-6\n[contact]\nstiffness = 0.018\n"
-                      "[fluid]\ndx_over_dp = 3.33\n[run]\nend_time = 0.01\n";
+  const char* scene =
+      "[domain]\nsize_dp = [12, 12, 12]\n[particles]\ndiameter = 75e-6\n[contact]\nstiffness = 0.018\n"
+      "[fluid]\ndx_over_dp = 3.33\n[run]\nend_time = 0.01\n";
   SyntheticSpec s;
   const cgd::fit::FilteredFile f = make_synthetic(s);
   const std::string path = (dir / "f.h5").string();
@@ -240,7 +258,8 @@ TEST(FitInput, FilteredFileRoundTripAndRefusals) {
   // a file that is not "filtered"
   const std::string foreign = (dir / "snap.h5").string();
   cgd::fit::testing::write_filtered(foreign, f, scene, "snapshot");
-  expect_input_error([&] { cgd::fit::read_filtered_file(foreign); }, {foreign, "cgd_format", "snapshot", "not a filtered file"});
+  expect_input_error([&] { cgd::fit::read_filtered_file(foreign); },
+                     {foreign, "cgd_format", "snapshot", "not a filtered file"});
   expect_input_error([&] { cgd::fit::read_filtered_file((dir / "none.h5").string()); }, {"none.h5"});
   fs::remove_all(dir);
 }
