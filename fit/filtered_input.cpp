@@ -97,6 +97,7 @@ FilteredFile read_filtered_file(const std::string& path) {
     need_attr(g, "F");
     w.F = f.attr_double(g, "F");
     if (f.has_attr(g, "width_m")) w.width_m = f.attr_double(g, "width_m");
+    if (f.has_attr(g, "width_over_cell")) w.width_over_cell = f.attr_double(g, "width_over_cell");
     w.whole_box = g == "/whole_box";
     if (!(w.F > 0)) throw InputError(path + ": " + g + " attribute F = " + number(w.F) + ": must be > 0");
     for (const char* d : {"H", "H_low", "H_high", "count", "phi_mean"}) need(g + "/" + d);

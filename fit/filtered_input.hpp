@@ -1,6 +1,7 @@
 #pragma once
 // The fitter's view of filtered files (cgd_format = "filtered", docs/schema-filtered.md): what cgd-fit
 // reads from each, and the checks that files pooled into one fit describe the same physics.
+#include <cmath>
 #include <cstdint>
 #include <string>
 #include <vector>
@@ -22,6 +23,7 @@ struct WidthSeries {
   std::string group;  // "/width_0", ..., "/whole_box"
   double F = 0;       // L_char / width
   double width_m = 0;
+  double width_over_cell = NAN;  // attribute width_over_cell (NaN when absent: not checked)
   bool whole_box = false;
   std::vector<double> H, H_low, H_high, phi_mean;  // per bin (NaN where the bin is empty)
   std::vector<std::int64_t> count;                 // particle samples per bin

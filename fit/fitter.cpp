@@ -28,6 +28,10 @@ namespace {
 
 constexpr double kZ95 = 1.959963984540054;  // two-sided 95 % normal quantile
 constexpr double kLogAMin = -6.907755278982137, kLogAMax = 9.210340371976184;  // log(1e-3), log(1e4)
+// Bounds of a bin's h: H = h/(1 + aF) <= h, and h >= 1 would make beta_bar <= 0 at F -> 0; h < 0
+// (drag increase, seen at very low phi in the paper) is allowed down to -1 per bin, the curve is
+// clamped to [0, h_max] afterwards.
+constexpr double kHMin = -1.0, kHMax = 1.0;
 const double kNaN = std::numeric_limits<double>::quiet_NaN();
 
 // ---- observations: H per (file, width) series and bin ---------------------------------------------------
@@ -36,6 +40,7 @@ struct Series {
   std::size_t file = 0, width = 0;
   double F = 0;
   bool whole_box = false;
+  bool fitted = true;  // a box filter at least min_width_over_cell cells wide
   std::vector<double> H, sigma;
   std::vector<double> count;
 };
@@ -47,7 +52,8 @@ using Weights = std::vector<std::vector<double>>;
 /// recomputed from its per-snapshot sums, H = 1 - sum m N / sum m M (docs/schema-filtered.md), and
 /// sigma is scaled by sqrt(n_snapshots / sum m) (fewer snapshots, wider interval); weights[f] all zero
 /// leaves the file out.
-std::vector<Series> observe(const std::vector<FilteredFile>& files, const Weights* weights) {
+std::vector<Series> observe(const std::vector<FilteredFile>& files, const Weights* weights,
+                            double min_width_over_cell) {
   std::vector<Series> out;
   for (std::size_t f = 0; f < files.size(); ++f) {
     const FilteredFile& file = files[f];
@@ -66,6 +72,7 @@ std::vector<Series> observe(const std::vector<FilteredFile>& files, const Weight
       s.width = w;
       s.F = ws.F;
       s.whole_box = ws.whole_box;
+      s.fitted = !ws.whole_box && !(ws.width_over_cell < min_width_over_cell - 1e-9);
       s.H.assign(nb, kNaN);
       s.sigma.assign(nb, kNaN);
       s.count.assign(nb, 0.0);
@@ -95,7 +102,7 @@ std::vector<Series> observe(const std::vector<FilteredFile>& files, const Weight
 }
 
 bool usable(const Series& s, std::size_t b, double min_count) {
-  return !s.whole_box && s.count[b] >= min_count && std::isfinite(s.H[b]) && std::isfinite(s.sigma[b]) &&
+  return s.fitted && s.count[b] >= min_count && std::isfinite(s.H[b]) && std::isfinite(s.sigma[b]) &&
          s.sigma[b] > 0.0;
 }
 
@@ -128,23 +135,37 @@ int residual_df(const gsl_vector* x, void* data, gsl_matrix* J) {
 /// errors from (J^T J)^-1 (residuals are already divided by sigma) and chi^2.
 void fit_one_bin(const BinPoints& pts, BinEstimate& out) {
   const std::size_t n = pts.F.size();
-  // start: for each log a on a grid, h is linear -> closed form; keep the best chi^2
-  double best_chi2 = std::numeric_limits<double>::infinity(), best_h = 0, best_t = 0;
-  for (int k = 0; k <= 60; ++k) {
-    const double t = kLogAMin + (kLogAMax - kLogAMin) * k / 60.0, a = std::exp(t);
+  // Start, and the answer when the minimum lies on a bound: for each log a on a grid, chi^2 is a
+  // parabola in h, so the best h in [kHMin, kHMax] is the clamped linear solution; a coarse grid over
+  // log a in [log 1e-3, log 1e4], then a fine one around its best point.
+  auto profile = [&](double t, double& h_out) {
+    const double a = std::exp(t);
     double sgh = 0, sgg = 0;
     for (std::size_t i = 0; i < n; ++i) {
       const double g = 1.0 / (1.0 + a * pts.F[i]), w = 1.0 / (pts.sigma[i] * pts.sigma[i]);
       sgh += w * g * pts.H[i];
       sgg += w * g * g;
     }
-    const double h = sgh / sgg;
+    h_out = std::clamp(sgh / sgg, kHMin, kHMax);
     double chi2 = 0;
     for (std::size_t i = 0; i < n; ++i) {
-      const double r = (h / (1.0 + a * pts.F[i]) - pts.H[i]) / pts.sigma[i];
+      const double r = (h_out / (1.0 + a * pts.F[i]) - pts.H[i]) / pts.sigma[i];
       chi2 += r * r;
     }
-    if (chi2 < best_chi2) best_chi2 = chi2, best_h = h, best_t = t;
+    return chi2;
+  };
+  double best_chi2 = std::numeric_limits<double>::infinity(), best_h = 0, best_t = 0;
+  const double step = (kLogAMax - kLogAMin) / 60.0;
+  for (int k = 0; k <= 60; ++k) {
+    double h_k = 0;
+    const double t = kLogAMin + step * k, chi2 = profile(t, h_k);
+    if (chi2 < best_chi2) best_chi2 = chi2, best_h = h_k, best_t = t;
+  }
+  const double coarse_t = best_t;
+  for (int k = -20; k <= 20; ++k) {
+    double h_k = 0;
+    const double t = std::clamp(coarse_t + step * k / 20.0, kLogAMin, kLogAMax), chi2 = profile(t, h_k);
+    if (chi2 < best_chi2) best_chi2 = chi2, best_h = h_k, best_t = t;
   }
   double h = best_h, t = best_t, se_h = kNaN, se_t = kNaN, chi2 = best_chi2;
 
@@ -167,9 +188,11 @@ void fit_one_bin(const BinPoints& pts, BinEstimate& out) {
     const double h1 = gsl_vector_get(x, 0), t1 = gsl_vector_get(x, 1);
     double c2 = 0;
     gsl_blas_ddot(gsl_multifit_nlinear_residual(w), gsl_multifit_nlinear_residual(w), &c2);
-    if (std::isfinite(h1) && std::isfinite(t1) && c2 <= best_chi2 * (1 + 1e-12)) {
+    // the unconstrained refinement is kept when it stays inside the bounds and does not lose
+    if (std::isfinite(h1) && std::isfinite(t1) && h1 >= kHMin && h1 <= kHMax && t1 >= kLogAMin &&
+        t1 <= kLogAMax && c2 <= best_chi2 * (1 + 1e-12)) {
       h = h1;
-      t = std::clamp(t1, kLogAMin, kLogAMax);
+      t = t1;
       chi2 = c2;
     }
   }
@@ -191,7 +214,8 @@ void fit_one_bin(const BinPoints& pts, BinEstimate& out) {
   gsl_multifit_nlinear_free(w);
   // An unidentifiable a (h ~ 0, or H flat in F) or a at its bound carries little information on a:
   // give it a weak weight in the spline (se of log a >= 2, a factor 7) instead of dropping the bin's h.
-  const bool at_bound = t <= kLogAMin + 1e-9 || t >= kLogAMax - 1e-9;
+  const bool at_bound = t <= kLogAMin + 1e-9 || t >= kLogAMax - 1e-9 || h <= kHMin || h >= kHMax;
+  out.at_bound = at_bound;
   if (!std::isfinite(se_t) || at_bound) se_t = std::max(std::isfinite(se_t) ? se_t : 0.0, 2.0);
   if (!std::isfinite(se_h)) se_h = kNaN;
   out.h = h;
@@ -385,16 +409,25 @@ FitResult fit_filtered_drag(const std::vector<FilteredFile>& files, const FitOpt
 
   // enough widths?
   std::set<double> widths;
+  int narrow = 0;
   for (const FilteredFile& f : files)
-    for (const WidthSeries& w : f.widths)
-      if (!w.whole_box) widths.insert(w.F);
+    for (const WidthSeries& w : f.widths) {
+      if (w.whole_box) continue;
+      if (w.width_over_cell < o.min_width_over_cell - 1e-9) {
+        ++narrow;
+        continue;
+      }
+      widths.insert(w.F);
+    }
   if (static_cast<int>(widths.size()) < o.min_widths)
     throw InputError(file_list(files) + ": too few filter widths to fit h(phi) and a(phi): " +
-                     std::to_string(widths.size()) + " distinct width(s) (groups /width_<k>), at least " +
-                     std::to_string(o.min_widths) + " needed (2 parameters per bin + 1 degree of freedom)");
+                     std::to_string(widths.size()) + " distinct width(s) (groups /width_<k>) of at least " +
+                     std::to_string(o.min_width_over_cell) + " cells (" + std::to_string(narrow) +
+                     " narrower not used), at least " + std::to_string(o.min_widths) +
+                     " needed (2 parameters per bin + 1 degree of freedom)");
 
   // ---- steps 1 and 2 on the data as filtered
-  const std::vector<Series> series = observe(files, nullptr);
+  const std::vector<Series> series = observe(files, nullptr, o.min_width_over_cell);
   R.bins = fit_bins(files, series, o);
   int used = 0;
   double phi_max = o.phi_crit;
@@ -495,7 +528,7 @@ FitResult fit_filtered_drag(const std::vector<FilteredFile>& files, const FitOpt
               for (std::size_t k : pick) wts[f][k] += 1.0;
             }
         }
-        rs = observe(files, &wts);
+        rs = observe(files, &wts, o.min_width_over_cell);
         // keep the data's intervals (not rescaled by the resampled snapshot count: it is n on average)
         for (std::size_t i = 0; i < rs.size(); ++i) rs[i].sigma = series[i].sigma;
       } else {
@@ -563,16 +596,16 @@ FitResult fit_filtered_drag(const std::vector<FilteredFile>& files, const FitOpt
     wr.group = files[s.file].widths[s.width].group;
     wr.F = s.F;
     wr.whole_box = s.whole_box;
+    wr.fitted = s.fitted;
     double sum = 0, sum_z = 0, sum_z2 = 0, sum_s = 0;
     for (std::size_t b = 0; b < s.H.size(); ++b) {
       const BinEstimate& e = R.bins[b];
-      const bool ok = s.whole_box
-                          ? (s.count[b] >= static_cast<double>(o.min_count) && std::isfinite(s.H[b]) &&
-                             std::isfinite(s.sigma[b]) && s.sigma[b] > 0 && e.phi >= o.phi_crit)
-                          : (e.used && usable(s, b, static_cast<double>(o.min_count)));
+      const bool ok = !s.fitted ? (s.count[b] >= static_cast<double>(o.min_count) && std::isfinite(s.H[b]) &&
+                                   std::isfinite(s.sigma[b]) && s.sigma[b] > 0 && e.phi >= o.phi_crit)
+                                : (e.used && usable(s, b, static_cast<double>(o.min_count)));
       if (!ok) continue;
       const double smooth = curves.h(e.phi) / (1.0 + curves.a(e.phi) * s.F);
-      const double model = s.whole_box ? smooth : e.h / (1.0 + std::exp(e.log_a) * s.F);
+      const double model = !s.fitted ? smooth : e.h / (1.0 + std::exp(e.log_a) * s.F);
       const double r = s.H[b] - model;
       sum += r;
       sum_z += r / s.sigma[b];
@@ -613,7 +646,7 @@ FitResult fit_filtered_drag(const std::vector<FilteredFile>& files, const FitOpt
         for (std::size_t k = 0; k < files[f].snapshots(); ++k)
           if (files[f].snapshot_run[k] == run) train[f][k] = 0.0, test[f][k] = 1.0;
       }
-      std::vector<Series> tr = observe(files, &train);
+      std::vector<Series> tr = observe(files, &train, o.min_width_over_cell);
       if (run < 0)  // file without per-snapshot sums: leave the whole file out
         tr.erase(std::remove_if(tr.begin(), tr.end(), [&](const Series& s) { return s.file == f; }),
                  tr.end());
@@ -641,11 +674,11 @@ FitResult fit_filtered_drag(const std::vector<FilteredFile>& files, const FitOpt
         only[f] = test[f];
         for (std::size_t g = 0; g < files.size(); ++g)
           if (g != f) only[g].assign(files[g].snapshots(), 0.0);
-        te = observe(files, &only);
+        te = observe(files, &only, o.min_width_over_cell);
       }
       double s2 = 0, s1 = 0;
       for (const Series& s : te) {
-        if (s.whole_box) continue;
+        if (!s.fitted) continue;
         for (std::size_t b = 0; b < s.H.size(); ++b) {
           const BinEstimate& e = R.bins[b];
           if (!e.used || !(s.count[b] >= static_cast<double>(o.min_count)) || !std::isfinite(s.H[b]))

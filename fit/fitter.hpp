@@ -35,9 +35,10 @@ struct FitOptions {
   int min_widths = 3;            // distinct widths a bin needs (2 parameters + 1 degree of freedom)
   int bootstrap = 400;           // replicates (0: no bands)
   std::uint64_t seed = 1;
-  int breakpoints = 0;         // spline breakpoints (0: from the number of bins, 5..15)
-  double h_max = 0.99;         // upper clamp of h (beta_bar > 0)
-  bool cross_validate = true;  // leave-one-run-out
+  int breakpoints = 0;               // spline breakpoints (0: from the number of bins, 5..15)
+  double min_width_over_cell = 2.0;  // narrower filters are not fitted (a one-cell filter averages nothing)
+  double h_max = 0.99;               // upper clamp of h (beta_bar > 0)
+  bool cross_validate = true;        // leave-one-run-out
 };
 
 /// The per-bin estimate of step 1.
@@ -48,6 +49,7 @@ struct BinEstimate {
   std::string dropped;  // why not ("" when used)
   int widths = 0;       // points in the fit
   double h = 0, log_a = 0, se_h = 0, se_log_a = 0, chi2 = 0;
+  bool at_bound = false;  // h at -1 or 1, or a at 1e-3 or 1e4: the form does not fit this bin well
 };
 
 /// Residual statistics of one width of one file (step 4).
@@ -55,6 +57,7 @@ struct WidthResiduals {
   std::string file, group;
   double F = 0;
   bool whole_box = false;
+  bool fitted = true;  // false: whole box or narrower than min_width_over_cell (a check, not data)
   int points = 0;
   double mean = 0;               // mean of H - H_model (per-bin fits; for the whole box the smoothed model)
   double mean_z = 0, rms_z = 0;  // of (H - H_model)/sigma

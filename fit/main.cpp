@@ -38,6 +38,11 @@ int main(int argc, char** argv) {
                    "Bootstrap replicates for the bands (default 400; 0: none)")
         ->check(CLI::Range(0, 100000));
     app.add_option("--seed", options.seed, "Seed of the bootstrap (default 1)");
+    app.add_option(
+           "--min-width-over-cell", options.min_width_over_cell,
+           "Narrower filters (in fluid cells) are not fitted, only checked (default 2: a one-cell filter "
+           "averages nothing below the grid)")
+        ->check(CLI::Range(0.0, 1e6));
     app.add_option("--phi-crit", options.phi_crit, "Below it h -> 0 linearly (default 0.016, the paper's)")
         ->check(CLI::Range(1e-6, 0.5));
     app.add_option("--breakpoints", options.breakpoints,

@@ -116,6 +116,7 @@ void write_model_file(const std::string& path, const FitResult& R, const std::ve
     f.create_group(d);
     f.set_attr(d, "min_count", o.min_count);
     f.set_attr(d, "min_widths", static_cast<std::int64_t>(o.min_widths));
+    f.set_attr(d, "min_width_over_cell", o.min_width_over_cell);
     f.set_attr(d, "breakpoints", static_cast<std::int64_t>(R.breakpoints));
     f.set_attr(d, "lambda_h", R.lambda_h);
     f.set_attr(d, "lambda_log_a", R.lambda_log_a);
@@ -183,7 +184,8 @@ std::string fit_report(const FitResult& R, const std::vector<FilteredFile>& file
   for (const BinEstimate& b : R.bins) (b.used ? used : dropped)++;
   out << "bins: " << used << " fitted, " << dropped << " dropped (a bin needs >= " << o.min_count
       << " samples at a width for that width to count, and >= " << o.min_widths
-      << " such widths; bins below phi_crit = " << o.phi_crit << " are not fitted)\n";
+      << " such widths of >= " << o.min_width_over_cell << " cells; bins below phi_crit = " << o.phi_crit
+      << " are not fitted)\n";
   // dropped bins, consecutive bins with the same reason on one line
   for (std::size_t i = 0; i < R.bins.size();) {
     if (R.bins[i].used) {
@@ -222,7 +224,10 @@ std::string fit_report(const FitResult& R, const std::vector<FilteredFile>& file
     out << "  " << w.file << " : " << w.group << format("  %7.4f", w.F) << format("  %4.0f", double(w.points))
         << format("  %+8.4f", w.mean) << format("  %+6.2f", w.mean_z) << format("  %6.2f", w.rms_z)
         << format("  %+8.4f", w.mean_smoothed)
-        << (w.whole_box ? "   (whole box: smoothed model, not fitted)" : "") << "\n";
+        << (w.whole_box ? "   (whole box: smoothed model, not fitted)"
+            : !w.fitted ? "   (narrow: smoothed model, not fitted)"
+                        : "")
+        << "\n";
   out << "  (a trend of mean z with F would mean 1/(1 + aF) is biased at the smallest or largest widths)\n";
   if (R.cv_runs.empty()) {
     out << "\nleave-one-run-out cross-validation: not possible (one run)\n";

@@ -265,3 +265,33 @@ TEST(FitInput, FilteredFileRoundTripAndRefusals) {
 }
 
 }  // namespace
+
+namespace {
+
+// Filters narrower than --min-width-over-cell (default 2 cells: a one-cell filter averages nothing below
+// the grid) are not fitted, only checked: adding a one-cell width with nonsense H leaves the curves
+// exactly as they were, and the width is listed among the residuals as not fitted.
+TEST(Fit, NarrowFiltersAreCheckedNotFitted) {
+  SyntheticSpec s;
+  s.noise = 0.05;
+  cgd::fit::FilteredFile f = make_synthetic(s);
+  for (auto& w : f.widths) w.width_over_cell = w.whole_box ? NAN : 2.0 * 0.6 / w.F;  // 2 .. 12 cells
+  const FitResult without = fit({f}, 0);
+  cgd::fit::WidthSeries narrow = f.widths.front();
+  narrow.group = "/width_narrow";
+  narrow.F = 1.2;
+  narrow.width_over_cell = 1.0;
+  for (double& H : narrow.H) H = -0.5;
+  for (double& n : narrow.numerator) n *= 2.0;
+  f.widths.insert(f.widths.begin(), narrow);
+  const FitResult with = fit({f}, 0);
+  for (double phi : test_points()) {
+    EXPECT_DOUBLE_EQ(cgd::SplineCurves{&with.model}.h(phi), cgd::SplineCurves{&without.model}.h(phi));
+    EXPECT_DOUBLE_EQ(cgd::SplineCurves{&with.model}.a(phi), cgd::SplineCurves{&without.model}.a(phi));
+  }
+  ASSERT_EQ(with.residuals.front().group, "/width_narrow");
+  EXPECT_FALSE(with.residuals.front().fitted);
+  EXPECT_LT(with.residuals.front().mean, -0.5);  // H = -0.5 against a positive model
+}
+
+}  // namespace
