@@ -589,6 +589,15 @@ FitResult fit_filtered_drag(const std::vector<FilteredFile>& files, const FitOpt
     }
   }
 
+  for (const Series& s : series) {
+    R.data_series.push_back(files[s.file].path + ":" + files[s.file].widths[s.width].group);
+    R.data_F.push_back(s.F);
+    R.data_fitted.push_back(s.fitted ? 1 : 0);
+    R.data_H.insert(R.data_H.end(), s.H.begin(), s.H.end());
+    R.data_sigma.insert(R.data_sigma.end(), s.sigma.begin(), s.sigma.end());
+  }
+  for (const BinEstimate& b : R.bins) R.data_phi.push_back(b.phi);
+
   // ---- step 4: residuals per width (per-bin fits and the smoothed model), whole box as a check
   for (const Series& s : series) {
     WidthResiduals wr;

@@ -84,6 +84,11 @@ struct FitResult {
   std::vector<double> H, H_low, H_high;  // band_F.size() x band_phi.size(), row-major
   int replicates = 0;
   std::string resampling;  // "snapshot blocks" or "normal intervals" (no per-snapshot sums)
+  // the data as fitted: one row per (file, width) series, one column per bin
+  std::vector<std::string> data_series;    // "file:group"
+  std::vector<double> data_F, data_phi;    // per series; per bin (the bins' mean phi)
+  std::vector<double> data_H, data_sigma;  // series x bins, row-major (NaN where empty)
+  std::vector<std::int64_t> data_fitted;   // per series: 1 fitted, 0 a check (whole box, narrow)
   std::vector<WidthResiduals> residuals;
   std::vector<CrossValidationRun> cv_runs;
   double cv_rms = NAN, cv_in_sample_rms = NAN;

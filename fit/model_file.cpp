@@ -88,7 +88,7 @@ void write_model_file(const std::string& path, const FitResult& R, const std::ve
     // per-bin estimates (the data points of the paper's Figure 1)
     f.create_group("/bins");
     std::vector<double> phi, center, h, se_h, a, se_log_a, chi2;
-    std::vector<std::int64_t> used, widths;
+    std::vector<std::int64_t> used, widths, at_bound;
     for (const BinEstimate& b : R.bins) {
       phi.push_back(b.phi);
       center.push_back(b.phi_center);
@@ -99,6 +99,7 @@ void write_model_file(const std::string& path, const FitResult& R, const std::ve
       chi2.push_back(b.used ? b.chi2 : NAN);
       used.push_back(b.used ? 1 : 0);
       widths.push_back(b.widths);
+      at_bound.push_back(b.used && b.at_bound ? 1 : 0);
     }
     for (const auto& [name, v] : {std::pair<const char*, const std::vector<double>*>{"phi", &phi},
                                   {"phi_center", &center},
@@ -110,6 +111,19 @@ void write_model_file(const std::string& path, const FitResult& R, const std::ve
       write_vector(f, std::string("/bins/") + name, *v);
     f.write_replicated("/bins/used", used, {used.size()});
     f.write_replicated("/bins/widths", widths, {widths.size()});
+    f.write_replicated("/bins/at_bound", at_bound, {at_bound.size()});
+
+    // the data as fitted (H of every width of every file per bin)
+    if (!R.data_F.empty()) {
+      f.create_group("/data");
+      f.set_attr("/data", "series", R.data_series);
+      write_vector(f, "/data/F", R.data_F);
+      write_vector(f, "/data/phi", R.data_phi);
+      const std::vector<std::uint64_t> ddims{R.data_F.size(), R.data_phi.size()};
+      f.write_replicated("/data/H", R.data_H, ddims);
+      f.write_replicated("/data/H_sigma", R.data_sigma, ddims);
+      f.write_replicated("/data/fitted", R.data_fitted, {R.data_fitted.size()});
+    }
 
     // diagnostics
     const std::string d = "/diagnostics";
