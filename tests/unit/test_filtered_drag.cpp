@@ -73,7 +73,7 @@ class TempDir {
 
 std::string source_dir() {
   const char* s = std::getenv("CGD_SOURCE_DIR");
-  return s ? s : ".";
+  return s ? s : CGD_SOURCE_DIR_DEFAULT;
 }
 
 // ---- the published law ---------------------------------------------------------------------------------
@@ -82,7 +82,7 @@ std::string source_dir() {
 // its interval equals Radl2014Curves to round-off of a cubic with O(1) terms (1e-13 absolute).
 TEST(Radl2014, CoefficientsAreThoseOfTheReferenceCsv) {
   std::ifstream csv(source_dir() + "/data/reference/radl2014-filtered-drag.csv");
-  ASSERT_TRUE(csv) << "needs CGD_SOURCE_DIR (set by CTest)";
+  ASSERT_TRUE(csv) << source_dir() << "/data/reference/radl2014-filtered-drag.csv not found";
   std::string line;
   int rows = 0;
   const Radl2014Curves radl;
