@@ -578,8 +578,8 @@ FitResult fit_filtered_drag(const std::vector<FilteredFile>& files, const FitOpt
       R.h_high[i] = std::min(R.h_high[i], o.h_max);
       double log_lo = std::log(R.a_low[i]), log_hi = std::log(R.a_high[i]);
       widen(std::log(R.a[i]), log_lo, log_hi, va);
-      R.a_low[i] = std::exp(log_lo);
-      R.a_high[i] = std::exp(log_hi);
+      R.a_low[i] = std::exp(std::max(log_lo, kLogAMin));  // the per-bin bounds of a
+      R.a_high[i] = std::exp(std::min(log_hi, kLogAMax));
       for (std::size_t j = 0; j < nF; ++j) {
         const double g = 1.0 / (1.0 + R.a[i] * R.band_F[j]);
         const double dH_dlog_a = -R.h[i] * R.a[i] * R.band_F[j] * g * g;

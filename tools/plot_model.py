@@ -97,7 +97,7 @@ def main():
     if bound.any():
         ax[1].plot(bins["phi"][bound], bins["a"][bound], "o", mfc="none", ms=5, label="per-bin fit at a bound")
     ax[1].plot(phi, ra(phi), "k--", label="Radl & Sundaresan 2014")
-    ax[1].set_ylim(min(b["a_low"].min(), 1.0) / 2, max(b["a_high"].max(), 25.0) * 2)
+    ax[1].set_ylim(min(b["a"].min(), 1.0) / 5, max(b["a"].max(), 25.0) * 5)
     ax[1].set(xlabel=r"$\bar\phi_p$", ylabel="a", yscale="log", title="a: width dependence 1/(1 + aF)")
     ax[1].legend(fontsize=8)
     F = np.geomspace(max(b["F"].min() / 3, 1e-3), b["F"].max() * 3, 100)
