@@ -539,7 +539,12 @@ FitResult fit_filtered_drag(const std::vector<FilteredFile>& files, const FitOpt
       }
       std::vector<BinEstimate> rb = fit_bins(files, rs, o);
       // the replicate uses the bins the main fit used (a bin the replicate cannot fit is left out)
-      for (std::size_t b = 0; b < rb.size(); ++b) rb[b].used = rb[b].used && R.bins[b].used;
+      int replica_bins = 0;
+      for (std::size_t b = 0; b < rb.size(); ++b) replica_bins += rb[b].used = rb[b].used && R.bins[b].used;
+      if (replica_bins < 4) {  // too few bins to fit (rare: a resample that empties bins); not counted
+        ++R.replicates_skipped;
+        continue;
+      }
       const Curves c = fit_curves(rb, o.phi_crit, phi_max, R.breakpoints, R.lambda_h, R.lambda_log_a);
       replica.h_spline = c.h.spline;
       replica.log_a_spline = c.log_a.spline;
@@ -550,6 +555,7 @@ FitResult fit_filtered_drag(const std::vector<FilteredFile>& files, const FitOpt
         for (std::size_t j = 0; j < nF; ++j) rep_H[j * nphi + i].push_back(h / (1.0 + a * R.band_F[j]));
       }
     }
+    if (rep_h.front().empty()) throw RunError("bootstrap: every replicate lost too many bins to fit");
     for (std::size_t i = 0; i < nphi; ++i) {
       R.h_low[i] = quantile(rep_h[i], 0.025);
       R.h_high[i] = quantile(rep_h[i], 0.975);
@@ -560,7 +566,7 @@ FitResult fit_filtered_drag(const std::vector<FilteredFile>& files, const FitOpt
       R.H_low[k] = quantile(rep_H[k], 0.025);
       R.H_high[k] = quantile(rep_H[k], 0.975);
     }
-    R.replicates = o.bootstrap;
+    R.replicates = o.bootstrap - R.replicates_skipped;
     // Widen the percentile bands by the smoothing-bias allowance of the main fit (SplineFit::bias_cov),
     // added in quadrature to each side, in the fitted variables (h; log a); below phi_crit h's
     // allowance scales like h (phi/phi_crit), a's is constant.

@@ -82,8 +82,9 @@ struct FitResult {
   std::vector<double> band_phi, h, h_low, h_high, a, a_low, a_high;
   std::vector<double> band_F;            // F of every width in the data, ascending
   std::vector<double> H, H_low, H_high;  // band_F.size() x band_phi.size(), row-major
-  int replicates = 0;
-  std::string resampling;  // "snapshot blocks" or "normal intervals" (no per-snapshot sums)
+  int replicates = 0;                    // bootstrap replicates used
+  int replicates_skipped = 0;            // replicates that left fewer than 4 bins to fit
+  std::string resampling;                // "snapshot blocks" or "normal intervals" (no per-snapshot sums)
   // the data as fitted: one row per (file, width) series, one column per bin
   std::vector<std::string> data_series;    // "file:group"
   std::vector<double> data_F, data_phi;    // per series; per bin (the bins' mean phi)

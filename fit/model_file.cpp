@@ -219,7 +219,10 @@ std::string fit_report(const FitResult& R, const std::vector<FilteredFile>& file
       << ", edf(log a) = " << format("%.1f", R.edf_log_a) << "; h clamped at " << R.h_clamped
       << " grid points\n";
   out << "bands: " << R.replicates << " bootstrap replicates over " << R.resampling
-      << ", 95 % percentile\n\n";
+      << ", 95 % percentile, widened by the splines' smoothing-bias allowance";
+  if (R.replicates_skipped > 0)
+    out << " (" << R.replicates_skipped << " replicates with < 4 fittable bins skipped)";
+  out << "\n\n";
   out << "   phi   h fit [95% band]         h Radl2014   a fit [95% band]         a Radl2014\n";
   for (double phi : {0.01, 0.02, 0.05, 0.1, 0.15, 0.2, 0.25, 0.3, 0.35, 0.4, 0.45, 0.5}) {
     if (phi > R.band_phi.back() + 1e-12) break;
