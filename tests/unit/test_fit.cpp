@@ -76,14 +76,15 @@ TEST(Fit, RecoversKnownMasterCurves) {
 }
 
 // 95 % bands (bootstrap over snapshot blocks + the splines' smoothing-bias allowance): over 8 seeds x 23
-// test points (h and a separately) the truth lies inside the band at about 95 % (measured: h 0.92, a
-// 0.90). Expected a little below 95 %: blocks of 10 snapshots with AR(1) 0.5 noise hold 87 % of the
-// variance of the mean, and 20 blocks give (n-1)/n: the bootstrap sd is ~0.91 of the true one, so a
-// nominal 95 % band covers ~92 %. Accepted: 85-99.5 %; a band far too narrow (< 85 %) or far too wide
+// test points (h and a separately; H(F, phi) at the 6 data widths too) the truth lies inside the band at
+// about 95 % (measured: h 0.92, a 0.90, H 0.88). Expected a little below 95 %: blocks of 10 snapshots with
+// AR(1) 0.5 noise hold 87 % of the variance of the mean, and 20 blocks give (n-1)/n: the bootstrap sd is
+// ~0.91 of the true one, so a nominal 95 % band covers ~92 %. Accepted: 85-99.5 %; a band far too narrow (<
+// 85 %) or far too wide
 // (> 99.5 %: the truth never leaves it) fails. The points of one seed are correlated, so the binomial
 // sd (1.6 % at 184 points) understates the scatter: the window is wide for that reason.
 TEST(Fit, BandsCoverTheTruthAtAboutTheNominalRate) {
-  int inside_h = 0, inside_a = 0, total = 0;
+  int inside_h = 0, inside_a = 0, total = 0, inside_H = 0, total_H = 0;
   for (std::uint64_t seed = 1; seed <= 8; ++seed) {
     SyntheticSpec s;
     s.seed = seed;
@@ -94,8 +95,18 @@ TEST(Fit, BandsCoverTheTruthAtAboutTheNominalRate) {
       inside_h += r.h_low[i] <= truth_h(p) && truth_h(p) <= r.h_high[i];
       inside_a += r.a_low[i] <= truth_a(p) && truth_a(p) <= r.a_high[i];
       ++total;
+      for (std::size_t j = 0; j < r.band_F.size(); ++j) {
+        const std::size_t k = j * r.band_phi.size() + i;
+        const double H = truth_h(p) / (1 + truth_a(p) * r.band_F[j]);
+        inside_H += r.H_low[k] <= H && H <= r.H_high[k];
+        ++total_H;
+      }
     }
   }
+  const double cov_H = double(inside_H) / total_H;
+  std::printf("[ fit bands ] coverage of H(F, phi) at the data's widths: %.3f (%d points)\n", cov_H, total_H);
+  EXPECT_GE(cov_H, 0.85);
+  EXPECT_LE(cov_H, 0.995);
   const double cov_h = double(inside_h) / total, cov_a = double(inside_a) / total;
   std::printf("[ fit bands ] coverage of the truth by the 95 %% bands: h %.3f, a %.3f (%d points)\n", cov_h,
               cov_a, total);
