@@ -255,7 +255,12 @@ std::string fit_report(const FitResult& R, const std::vector<FilteredFile>& file
       out << "  " << c.file << " run " << c.run << ": " << c.points << " points, rms "
           << format("%.4f", c.rms) << ", mean " << format("%+.4f", c.mean) << "\n";
   }
-  out << "\nc_corr: a = " << R.model.c_corr_a << ", k = " << R.model.c_corr_k << " (" << R.model.c_corr_source
+  out << "\nrange: splines on [phi_crit, phi_max] = [" << R.model.phi_crit << ", "
+      << format("%.3f", R.model.h_spline.upper())
+      << "]; below phi_crit h -> 0 linearly and a is constant; above phi_max both are held constant "
+         "(extrapolation: "
+         "check the coarse runs' phi)\n";
+  out << "c_corr: a = " << R.model.c_corr_a << ", k = " << R.model.c_corr_k << " (" << R.model.c_corr_source
       << " values, until the parcel fit of the coarse stage replaces them)\n";
   out << "fit wall time: " << format("%.2f", R.wall_seconds) << " s\n";
   return out.str();
