@@ -514,6 +514,7 @@ FitResult fit_filtered_drag(const std::vector<FilteredFile>& files, const FitOpt
       }
     }
     std::vector<std::vector<double>> rep_h(nphi), rep_a(nphi), rep_H(nphi * nF);
+    std::vector<std::vector<double>> bin_h(R.bins.size()), bin_log_a(R.bins.size());
     DragModel replica = M;
     const SplineCurves replica_curves{&replica};
     for (int r = 0; r < o.bootstrap; ++r) {
@@ -541,6 +542,8 @@ FitResult fit_filtered_drag(const std::vector<FilteredFile>& files, const FitOpt
       // the replicate uses the bins the main fit used (a bin the replicate cannot fit is left out)
       int replica_bins = 0;
       for (std::size_t b = 0; b < rb.size(); ++b) replica_bins += rb[b].used = rb[b].used && R.bins[b].used;
+      for (std::size_t b = 0; b < rb.size(); ++b)
+        if (rb[b].used) bin_h[b].push_back(rb[b].h), bin_log_a[b].push_back(rb[b].log_a);
       if (replica_bins < 4) {  // too few bins to fit (rare: a resample that empties bins); not counted
         ++R.replicates_skipped;
         continue;
@@ -556,6 +559,17 @@ FitResult fit_filtered_drag(const std::vector<FilteredFile>& files, const FitOpt
       }
     }
     if (rep_h.front().empty()) throw RunError("bootstrap: every replicate lost too many bins to fit");
+    auto sd = [](const std::vector<double>& v) {
+      if (v.size() < 2) return kNaN;
+      const double mean = std::accumulate(v.begin(), v.end(), 0.0) / static_cast<double>(v.size());
+      double ss = 0;
+      for (double x : v) ss += (x - mean) * (x - mean);
+      return std::sqrt(ss / static_cast<double>(v.size() - 1));
+    };
+    for (std::size_t b = 0; b < R.bins.size(); ++b) {
+      R.bins[b].boot_se_h = sd(bin_h[b]);
+      R.bins[b].boot_se_log_a = sd(bin_log_a[b]);
+    }
     for (std::size_t i = 0; i < nphi; ++i) {
       R.h_low[i] = quantile(rep_h[i], 0.025);
       R.h_high[i] = quantile(rep_h[i], 0.975);

@@ -50,6 +50,9 @@ struct BinEstimate {
   int widths = 0;       // points in the fit
   double h = 0, log_a = 0, se_h = 0, se_log_a = 0, chi2 = 0;
   bool at_bound = false;  // h at -1 or 1, or a at 1e-3 or 1e4: the form does not fit this bin well
+  // bootstrap standard deviations (over the replicates that fitted the bin): unlike se_h, se_log_a from
+  // (J^T J)^-1 they include the correlation of the widths' errors (NaN without a bootstrap)
+  double boot_se_h = NAN, boot_se_log_a = NAN;
 };
 
 /// Residual statistics of one width of one file (step 4).

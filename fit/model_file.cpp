@@ -87,7 +87,7 @@ void write_model_file(const std::string& path, const FitResult& R, const std::ve
 
     // per-bin estimates (the data points of the paper's Figure 1)
     f.create_group("/bins");
-    std::vector<double> phi, center, h, se_h, a, se_log_a, chi2;
+    std::vector<double> phi, center, h, se_h, a, se_log_a, chi2, boot_se_h, boot_se_log_a;
     std::vector<std::int64_t> used, widths, at_bound;
     for (const BinEstimate& b : R.bins) {
       phi.push_back(b.phi);
@@ -97,6 +97,8 @@ void write_model_file(const std::string& path, const FitResult& R, const std::ve
       a.push_back(b.used ? std::exp(b.log_a) : NAN);
       se_log_a.push_back(b.used ? b.se_log_a : NAN);
       chi2.push_back(b.used ? b.chi2 : NAN);
+      boot_se_h.push_back(b.used ? b.boot_se_h : NAN);
+      boot_se_log_a.push_back(b.used ? b.boot_se_log_a : NAN);
       used.push_back(b.used ? 1 : 0);
       widths.push_back(b.widths);
       at_bound.push_back(b.used && b.at_bound ? 1 : 0);
@@ -107,7 +109,9 @@ void write_model_file(const std::string& path, const FitResult& R, const std::ve
                                   {"h_stderr", &se_h},
                                   {"a", &a},
                                   {"log_a_stderr", &se_log_a},
-                                  {"chi2", &chi2}})
+                                  {"chi2", &chi2},
+                                  {"h_stderr_bootstrap", &boot_se_h},
+                                  {"log_a_stderr_bootstrap", &boot_se_log_a}})
       write_vector(f, std::string("/bins/") + name, *v);
     f.write_replicated("/bins/used", used, {used.size()});
     f.write_replicated("/bins/widths", widths, {widths.size()});

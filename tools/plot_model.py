@@ -80,7 +80,10 @@ def main():
     fig, ax = plt.subplots(1, 3, figsize=(15, 4.5))
     ax[0].fill_between(phi, b["h_low"], b["h_high"], alpha=0.3, label="95 % band")
     ax[0].plot(phi, b["h"], label="fit (P-spline)")
-    ax[0].errorbar(bins["phi"][used], bins["h"][used], yerr=1.96 * bins["h_stderr"][used], fmt="o", ms=3,
+    # per-bin errors: the bootstrap's (widths' correlation included) when the file has them
+    se_h = bins.get("h_stderr_bootstrap", bins["h_stderr"])
+    se_log_a = bins.get("log_a_stderr_bootstrap", bins["log_a_stderr"])
+    ax[0].errorbar(bins["phi"][used], bins["h"][used], yerr=1.96 * se_h[used], fmt="o", ms=3,
                    label="per-bin fit")
     if bound.any():
         ax[0].plot(bins["phi"][bound], bins["h"][bound], "o", mfc="none", ms=5, label="per-bin fit at a bound")
@@ -91,8 +94,8 @@ def main():
     ax[0].legend(fontsize=8)
     ax[1].fill_between(phi, b["a_low"], b["a_high"], alpha=0.3)
     ax[1].plot(phi, b["a"], label="fit")
-    a_err = np.vstack([bins["a"][used] * (1 - np.exp(-1.96 * bins["log_a_stderr"][used])),
-                       bins["a"][used] * (np.exp(1.96 * bins["log_a_stderr"][used]) - 1)])
+    a_err = np.vstack([bins["a"][used] * (1 - np.exp(-1.96 * se_log_a[used])),
+                       bins["a"][used] * (np.exp(1.96 * se_log_a[used]) - 1)])
     ax[1].errorbar(bins["phi"][used], bins["a"][used], yerr=a_err, fmt="o", ms=3, label="per-bin fit")
     if bound.any():
         ax[1].plot(bins["phi"][bound], bins["a"][bound], "o", mfc="none", ms=5, label="per-bin fit at a bound")
