@@ -16,19 +16,26 @@
 int main(int argc, char** argv) {
   MPI_Init(&argc, &argv);
   const int status = cgd::run_tool([&] {
-    std::string reference;
+    std::string reference, model;
     int batches = 10;
     const cgd::RunOptions options = cgd::parse_run_command_line(
         argc, argv, "cgd-coarse",
         "Coarse-grid CFD-DEM / CFD-DPM (parcels) of a scene; prints the time-averaged slip over the sampling "
         "window and, with --reference, its error against a resolved run",
         [&](CLI::App& app) {
+          app.add_option("--model", model, "drag model file of cgd-fit: the same as --set fluid.drag=model "
+                                           "--set fluid.drag_model=MODEL.h5");
           app.add_option("--reference", reference, "resolved run directory (cgd-generate) to compare the slip with");
           app.add_option("--batches", batches, "batches of the standard error of the mean slip (default 10)");
         });
     int ranks = 1;
     MPI_Comm_size(MPI_COMM_WORLD, &ranks);
-    const cgd::Scene scene = cgd::load_scene(options.scene_path, options.overrides);
+    std::vector<std::string> overrides = options.overrides;
+    if (!model.empty()) {
+      overrides.push_back("fluid.drag=model");
+      overrides.push_back("fluid.drag_model=" + model);
+    }
+    const cgd::Scene scene = cgd::load_scene(options.scene_path, overrides);
     cgd::coarse::check_coarse_scene(scene, ranks);
     if (!reference.empty() && !std::filesystem::exists(std::filesystem::path(reference) / "series.h5"))
       throw cgd::InputError("--reference " + reference + ": no series.h5 there (expected a run directory of cgd-generate)");
@@ -47,7 +54,7 @@ int main(int argc, char** argv) {
       std::optional<cgd::coarse::Comparison> cmp;
       if (!reference.empty())
         cmp = cgd::coarse::compare(s, cgd::coarse::summarise_run(reference, u_t, scene.run.sampling_start_s, 1, batches));
-      const std::string drag = to_string(scene.fluid->drag);
+      const std::string drag = to_string(scene.fluid->drag);  // "model": the file is in the scene's drag_model
       cgd::coarse::write_summary((std::filesystem::path(settings.output_dir) / "summary.h5").string(), scene, s, cmp, drag);
       std::cout << "cgd-coarse: " << cgd::coarse::describe(s) << "\n";
       if (cmp) std::cout << "cgd-coarse: " << cgd::coarse::describe(*cmp) << "\n";

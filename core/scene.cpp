@@ -25,6 +25,7 @@
 #include <set>
 #include <sstream>
 
+#include "core/checksum.hpp"
 #include "core/error.hpp"
 #include "core/scales.hpp"
 
@@ -116,6 +117,8 @@ const std::vector<SectionSpec>& schema() {
         {"courant", Kind::Number, "Courant number of the fluid step"},
         {"coupling", Kind::String, "fluid-particle coupling"},
         {"drag", Kind::String, "microscopic drag law"},
+        {"drag_model", Kind::String, "path of the drag model file (cgd-fit) used by drag = \"model\""},
+        {"drag_model_checksum", Kind::String, "FNV-1a checksum of fluid.drag_model (recorded by cgd)"},
         {"pressure_gradient_force", Kind::Boolean, "apply -V_p grad p to the particles"}}},
       {"run",
        {{"end_time", Kind::Number, "s, simulated time"},
@@ -685,6 +688,26 @@ Scene build_scene(const SceneReader& in) {
                                  {"model", DragLaw::Model}},
                                 f.drag);
     if (auto v = in.boolean("fluid", "pressure_gradient_force")) f.pressure_gradient_force = *v;
+    if (auto v = in.string("fluid", "drag_model")) f.drag_model_path = *v;
+    if (auto v = in.string("fluid", "drag_model_checksum")) f.drag_model_checksum = *v;
+    if (f.drag == DragLaw::Model && f.drag_model_path.empty())
+      in.fail_missing("fluid", "drag_model", " with fluid.drag = \"model\"");
+    if (f.drag != DragLaw::Model && !f.drag_model_path.empty())
+      in.fail_value("fluid", "drag_model", std::string("is only used with fluid.drag = \"model\" (the scene has \"") +
+                                               to_string(f.drag) + "\"); remove it or set fluid.drag = \"model\"");
+    if (!f.drag_model_path.empty()) {
+      std::error_code ec;
+      if (!std::filesystem::is_regular_file(f.drag_model_path, ec))
+        in.fail_value("fluid", "drag_model", "no such file");
+      // The checksum identifies the model in every output file (the effective scene records it); a
+      // scene that pins one refuses a model file that has changed since.
+      const std::string sum = file_checksum_fnv1a(f.drag_model_path);
+      if (!f.drag_model_checksum.empty() && f.drag_model_checksum != sum)
+        in.fail_value("fluid", "drag_model_checksum",
+                      "differs from the checksum of " + f.drag_model_path + " (" + sum +
+                          "): the model file has changed since this scene recorded it");
+      f.drag_model_checksum = sum;
+    }
     const bool has_cells = in.has("fluid", "cells"), has_dx = in.has("fluid", "dx_over_dp");
     if (has_cells && has_dx)
       in.fail_value("fluid", "dx_over_dp",
@@ -871,6 +894,8 @@ Scene load_scene_from_string(const std::string& toml_text, const std::string& or
   Scene scene = build_scene(reader);
   scene.name = std::filesystem::path(origin).stem().string();
   scene.source_path = origin;
+  if (scene.fluid && !scene.fluid->drag_model_checksum.empty())  // record the model file's checksum
+    root["fluid"].as_table()->insert_or_assign("drag_model_checksum", scene.fluid->drag_model_checksum);
   scene.effective_toml = emit_scene(root);
   return scene;
 }

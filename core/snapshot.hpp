@@ -68,7 +68,4 @@ struct RunDirectory {
 /// InputError if `path` is not a directory or holds no snapshots/ folder.
 RunDirectory list_run_directory(const std::string& path);
 
-/// 64-bit FNV-1a hash of a file's bytes, as 16 hex digits (a cheap checksum to record provenance).
-std::string file_checksum(const std::string& path);
-
 }  // namespace cgd

@@ -9,6 +9,7 @@
 #include <random>
 #include <sstream>
 
+#include "core/checksum.hpp"
 #include "core/error.hpp"
 #include "core/h5.hpp"
 #include "core/output.hpp"
@@ -401,7 +402,7 @@ std::size_t run_filter(const FilterOptions& o, MPI_Comm comm) {
         const auto [r, i] = row_of[k];
         const double t0 = now_s();
         const Snapshot snap = read_snapshot(plan.runs[r].files[i]);
-        checksums[k] = file_checksum(plan.runs[r].files[i]);
+        checksums[k] = file_checksum_fnv1a(plan.runs[r].files[i]);
         read_s += now_s() - t0;
         SnapshotResult res = filter_snapshot(snap, plan, o, static_cast<std::int64_t>(k), r);
         filter_s += res.seconds;

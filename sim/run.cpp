@@ -14,6 +14,7 @@
 #include <sstream>
 
 #include "core/error.hpp"
+#include "core/filtered_drag.hpp"
 #include "core/h5.hpp"
 #include "core/output.hpp"
 #include "core/timers.hpp"
@@ -77,11 +78,6 @@ dem::DemSettings dem_settings_from_scene(const Scene& scene) {
   const Vec3& g = scene.domain.gravity_m_s2;
   s.drive.accel = {g[0], g[1], g[2]};
   if (scene.fluid && scene.solves_fluid()) {
-    const FluidConfig& f = *scene.fluid;
-    if (f.drag == DragLaw::Radl2014 || f.drag == DragLaw::Model)
-      throw InputError(scene.source_path + ": fluid.drag = \"" + to_string(f.drag) +
-                       "\": a filtered drag model belongs to coarse-grid runs (cgd-coarse); resolved runs allow "
-                       "\"beetstra\", \"wen-yu\", \"stokes\"");
     // the fluid forces arrive per particle from the coupling (sim/coupling/coupler.hpp)
     s.per_particle_drive = true;
   } else if (scene.fluid) {
@@ -197,6 +193,7 @@ class RunDriver {
     coupling::CouplerSettings cs;
     cs.drag = f.drag;
     cs.drag_params = {f.density_kg_m3, f.viscosity_Pa_s, scene_.particles.diameter_m};
+    cs.filtered = filtered_drag_setup(scene_, grid_->spacing());
     cs.particle_volume_m3 = scene_.derived.particle_volume_m3;
     cs.parcel_volume_factor = std::pow(scene_.particles.parcel_size, 3);
     cs.particle_mass_kg = scene_.derived.parcel_mass_kg;
@@ -207,7 +204,7 @@ class RunDriver {
     pressure_gradient_mean_ = {rho_mix * g[0], rho_mix * g[1], rho_mix * g[2]};
     // Particle drag is explicit over a fluid step (momentum exchange exact, coupler.hpp): keep
     // dt_fluid beta_max / rho_p <= 0.5, beta_max at the densest admissible state (eps at its floor).
-    const double beta_max = beta_p(f.drag, cs.drag_params, 1.0 - cs.void_fraction_floor, 0.0);
+    const double beta_max = beta_p(f.drag, cs.drag_params, cs.filtered, 1.0 - cs.void_fraction_floor, 0.0);
     dt_fluid_cap_ = 0.5 * scene_.particles.density_kg_m3 / beta_max;
     // A fluid step is a whole number of DEM steps: a DEM step longer than the fluid's stability
     // limits (explicit viscosity, explicit particle drag) cannot be run; refuse it before writing.

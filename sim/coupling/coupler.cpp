@@ -111,7 +111,7 @@ void Coupler::compute_drag(const dem::Particles& p, fluid::FluidState& state) {
   std::vector<double>& B = state.drag_coefficient;
   std::fill(B.begin(), B.end(), 0.0);
   for (int d = 0; d < 3; ++d) std::fill(bv_[d].begin(), bv_[d].end(), 0.0);
-  visit_drag_law(s_.drag, s_.drag_params, [&](const auto& law) {
+  visit_any_drag_law(s_.drag, s_.drag_params, s_.filtered, [&](const auto& law) {
     for (std::size_t i = 0; i < n; ++i) {
       double phi_p = 0;
       for_each_tsc_cell(view_, &p.x[3 * i], [&](std::size_t c, double w) { phi_p += w * phi_[c]; });

@@ -6,7 +6,7 @@
 //                proportion, from the cells above the floor, so sum eps is unchanged and the fluid's
 //                continuity stays exact);
 //   2. drag      per particle: eps_p and u_p = sum_c w_pc u_c (cell-centred u^n), beta_p = law(phi_p,
-//                |u_p - v_p|) (core/drag.hpp), deposited as the cells' implicit drag
+//                |u_p - v_p|) (core/drag.hpp; filtered laws core/filtered_drag.hpp), deposited as the cells' implicit drag
 //                B_c = sum_p beta_p V_p w_pc / V_cell and B_c V_c = sum_p beta_p V_p v_p w_pc / V_cell;
 //   3. fluid     step with these (sim/fluid/solver.hpp; drag implicit: B dt/rho_f >> 1 is fine);
 //   4. forces    per particle, from u^{n+1} and p^{n+1} interpolated with the same weights:
@@ -23,6 +23,7 @@
 #include <vector>
 
 #include "core/drag.hpp"
+#include "core/filtered_drag.hpp"
 #include "core/scene.hpp"
 #include "sim/coupling/exchange.hpp"
 #include "sim/dem/particles.hpp"
@@ -34,6 +35,7 @@ namespace cgd::coupling {
 struct CouplerSettings {
   DragLaw drag = DragLaw::Beetstra;
   DragParams drag_params;              // rho_f, mu_f, primary diameter
+  FilteredDragSetup filtered;          // model, Delta, L_char, alpha: for drag = radl2014 / model
   double particle_volume_m3 = 0;       // V_p of the primary
   double parcel_volume_factor = 1;     // alpha^3: primaries per parcel (drag scales with it)
   double particle_mass_kg = 0;         // mass of one (parcel) particle

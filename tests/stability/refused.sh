@@ -5,7 +5,7 @@
 #   * a fluid grid with fewer y-rows than ranks need (sim/fluid/grid.cpp);
 #   * a quiescent-fluid (Stokes) run whose DEM step exceeds half the particle relaxation time
 #     (explicit drag; sim/run.cpp dem_settings_from_scene);
-#   * a filtered drag law in a resolved run (sim/run.cpp);
+#   * a filtered drag law in a resolved run (generator/main.cpp);
 #   * --restart without a checkpoint, and an existing run directory without --restart (left untouched).
 # (t_star > 0.2, solids_fraction >= 0.64 and the like are refused by scene validation:
 #  tests/e2e/bad_input.sh, tests/unit/test_scene.cpp.)

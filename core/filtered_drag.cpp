@@ -1,0 +1,253 @@
+// Filtered drag laws (see filtered_drag.hpp) and the reader of drag model files
+// (docs/schema-drag-model.md).
+#include "core/filtered_drag.hpp"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstdio>
+#include <iterator>
+
+#include "core/error.hpp"
+#include "core/h5.hpp"
+#include "core/output.hpp"
+
+namespace cgd {
+
+namespace {
+
+/// One piece of a published master curve: value = c0 + c1 x + c2 x^2 + c3 x^3, x = phi - phi0, on
+/// [phi_lo, phi_hi). Transcribed from data/reference/radl2014-filtered-drag.csv (a test compares the
+/// two line by line).
+struct CubicPiece {
+  double phi_lo, phi_hi, phi0, c0, c1, c2, c3;
+};
+
+constexpr std::array<CubicPiece, 6> kRadlA{{
+    {0.0, 0.016, 0.0, 21.51, 0.0, 0.0, 0.0},
+    {0.016, 0.10, 0.0, 1.96, 29.40, 164.91, -1923.0},
+    {0.10, 0.18, 0.10, 4.63, 4.68, -412.04, 2254.0},
+    {0.18, 0.25, 0.18, 3.52, -17.99, 128.80, -603.0},
+    {0.25, 0.40, 0.25, 2.68, -8.82, 2.18, 112.33},  // c1 = -8.82 (MFiX), not -8.20 (CFDEMcoupling-PFM)
+    {0.40, 1.0, 0.0, 1.79, 0.0, 0.0, 0.0},
+}};
+
+constexpr std::array<CubicPiece, 9> kRadlH{{
+    {0.0, 0.03, 0.0, 0.0, 7.97, 0.0, 0.0},
+    {0.03, 0.08, 0.03, 0.239, 4.640, -4.410, 253.630},
+    {0.08, 0.12, 0.08, 0.492, 6.100, 33.630, -789.600},
+    {0.12, 0.18, 0.12, 0.739, 5.010, -61.100, 310.800},
+    {0.18, 0.34, 0.18, 0.887, 1.030, -5.170, 5.990},
+    {0.34, 0.48, 0.34, 0.943, -0.170, -2.290, -9.120},
+    {0.48, 0.55, 0.48, 0.850, -1.350, -6.130, -132.600},
+    {0.55, 0.60, 0.55, 0.680, -2.340, -225.200, 0.0},
+    {0.60, 1.0, 0.0, 0.0, 0.0, 0.0, 0.0},
+}};
+
+template <std::size_t N>
+double piecewise(const std::array<CubicPiece, N>& pieces, double phi) {
+  phi = std::clamp(phi, 0.0, 1.0);
+  const CubicPiece* p = &pieces.back();
+  for (const CubicPiece& q : pieces)
+    if (phi < q.phi_hi) {
+      p = &q;
+      break;
+    }
+  const double x = phi - p->phi0;
+  return p->c0 + x * (p->c1 + x * (p->c2 + x * p->c3));
+}
+
+std::string number(double x) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.9g", x);
+  return buf;
+}
+
+}  // namespace
+
+double parcel_correction(double alpha, double a_c, double k_c) {
+  return a_c + (1.0 - a_c) * std::exp(-k_c * (alpha - 1.0));
+}
+
+double Radl2014Curves::h(double phi) const {
+  return piecewise(kRadlH, phi);
+}
+double Radl2014Curves::a(double phi) const {
+  return piecewise(kRadlA, phi);
+}
+
+double BSpline::operator()(double x) const {
+  const int k = order;
+  const std::size_t n = coefficients.size();
+  x = std::clamp(x, lower(), upper());
+  // knot span i: t_i <= x < t_{i+1}, k-1 <= i <= n-1 (x = t_n belongs to the last span)
+  std::size_t i =
+      static_cast<std::size_t>(std::upper_bound(knots.begin(), knots.begin() + static_cast<long>(n), x) -
+                               knots.begin()) -
+      1;
+  i = std::clamp<std::size_t>(i, static_cast<std::size_t>(k - 1), n - 1);
+  // de Boor: d_j = c_{j+i-p}, p = k - 1; d_j <- (1 - alpha) d_{j-1} + alpha d_j
+  double d[16];
+  const int p = k - 1;
+  for (int j = 0; j <= p; ++j) d[j] = coefficients[i + j - p];
+  for (int r = 1; r <= p; ++r)
+    for (int j = p; j >= r; --j) {
+      const double left = knots[i + j - p], right = knots[i + j + 1 - r];
+      const double alpha = right > left ? (x - left) / (right - left) : 0.0;
+      d[j] = (1.0 - alpha) * d[j - 1] + alpha * d[j];
+    }
+  return d[p];
+}
+
+double SplineCurves::h(double phi) const {
+  const DragModel& m = *model;
+  const double lo = m.phi_crit, hi = m.h_spline.upper();
+  if (phi < lo) return std::clamp(m.h_spline(lo), 0.0, m.h_max) * std::max(phi, 0.0) / lo;
+  return std::clamp(m.h_spline(std::min(phi, hi)), 0.0, m.h_max);
+}
+
+double SplineCurves::a(double phi) const {
+  const DragModel& m = *model;
+  return std::exp(m.log_a_spline(std::clamp(phi, m.phi_crit, m.log_a_spline.upper())));
+}
+
+FilteredDragSetup filtered_drag_setup(const Scene& scene, const Vec3& cell_spacing_m) {
+  FilteredDragSetup setup;
+  if (!scene.fluid || (scene.fluid->drag != DragLaw::Radl2014 && scene.fluid->drag != DragLaw::Model))
+    return setup;
+  setup.filter_width_m = std::cbrt(cell_spacing_m[0] * cell_spacing_m[1] * cell_spacing_m[2]);
+  setup.l_char_m = scene.derived.l_char_m;
+  setup.parcel_size = scene.particles.parcel_size;
+  if (scene.fluid->drag == DragLaw::Model) {
+    auto model = std::make_shared<DragModel>(load_drag_model(scene.fluid->drag_model_path));
+    check_model_matches_scene(*model, scene);
+    setup.model = std::move(model);
+  }
+  check_filtered_setup(scene.fluid->drag, setup);
+  return setup;
+}
+
+void check_filtered_setup(DragLaw law, const FilteredDragSetup& setup) {
+  if (law != DragLaw::Radl2014 && law != DragLaw::Model) return;
+  const std::string name = std::string("drag law \"") + to_string(law) + "\"";
+  if (law == DragLaw::Model && !setup.model)
+    throw InputError(name + " needs a model file (fluid.drag_model = \"PATH\" or --model PATH)");
+  if (!(setup.filter_width_m > 0.0))
+    throw InputError(name + " needs the filter width Delta > 0 (cube root of the fluid cell volume), got " +
+                     number(setup.filter_width_m));
+  if (law == DragLaw::Radl2014 && !(setup.l_char_m > 0.0))
+    throw InputError(name + " needs L_char > 0 (a fluid and gravity), got " + number(setup.l_char_m));
+  if (!(setup.parcel_size >= 1.0))
+    throw InputError(name + ": the parcel size alpha must be >= 1, got " + number(setup.parcel_size));
+}
+
+double beta_p(DragLaw law, const DragParams& params, const FilteredDragSetup& setup, double phi,
+              double slip_speed) {
+  return visit_any_drag_law(law, params, setup,
+                            [&](const auto& drag) { return drag.beta_p(phi, slip_speed); });
+}
+
+namespace {
+
+BSpline read_spline(const h5::File& f, const std::string& group) {
+  const std::string& path = f.path();
+  if (!f.exists(group)) throw InputError(path + ": drag model file lacks the group " + group);
+  BSpline s;
+  s.order = static_cast<int>(f.attr_int(group, "order"));
+  s.knots = f.read_double(group + "/knots");
+  s.coefficients = f.read_double(group + "/coefficients");
+  const std::size_t n = s.coefficients.size();
+  const bool sorted = std::is_sorted(s.knots.begin(), s.knots.end());
+  if (s.order < 1 || s.order > 15 || n < static_cast<std::size_t>(s.order) ||
+      s.knots.size() != n + static_cast<std::size_t>(s.order) || !sorted || !(s.upper() > s.lower()))
+    throw InputError(
+        path + ": " + group +
+        ": not a valid B-spline (needs 1 <= order <= 15, len(knots) = len(coefficients) + order, "
+        "non-decreasing knots spanning an interval)");
+  for (double c : s.coefficients)
+    if (!std::isfinite(c)) throw InputError(path + ": " + group + "/coefficients: not finite");
+  return s;
+}
+
+}  // namespace
+
+DragModel load_drag_model(const std::string& path) {
+  h5::File f = h5::File::open_read(path, MPI_COMM_SELF);
+  auto need = [&](const char* key) {
+    if (!f.has_attr("/", key)) throw InputError(path + ": drag model file lacks the root attribute " + key);
+  };
+  need("cgd_format");
+  const std::string format = f.attr_string("/", "cgd_format");
+  if (format != "drag_model")
+    throw InputError(path + ": cgd_format = \"" + format +
+                     "\": not a drag model file (expected \"drag_model\", " + "written by cgd-fit)");
+  need("cgd_format_version");
+  if (f.attr_int("/", "cgd_format_version") != schema::kFormatVersion)
+    throw InputError(path +
+                     ": cgd_format_version = " + std::to_string(f.attr_int("/", "cgd_format_version")) +
+                     ": this build reads version " + std::to_string(schema::kFormatVersion));
+  DragModel m;
+  m.path = path;
+  for (const char* key :
+       {"base_drag", "u_t_convention", "u_t_m_s", "l_char_m", "phi_crit", "h_max", "diameter_m",
+        "particle_density_kg_m3", "fluid_density_kg_m3", "fluid_viscosity_Pa_s", "gravity_m_s2"})
+    need(key);
+  const std::string base = f.attr_string("/", "base_drag");
+  if (base == "beetstra")
+    m.base_law = DragLaw::Beetstra;
+  else if (base == "wen-yu")
+    m.base_law = DragLaw::WenYu;
+  else if (base == "stokes")
+    m.base_law = DragLaw::Stokes;
+  else
+    throw InputError(
+        path + ": base_drag = \"" + base +
+        "\": a model's base law must be a microscopic law (\"beetstra\", \"wen-yu\", \"stokes\")");
+  m.u_t_convention = f.attr_string("/", "u_t_convention");
+  if (m.u_t_convention != kUtConvention)
+    throw InputError(path + ": u_t_convention = \"" + m.u_t_convention + "\": this build uses \"" +
+                     kUtConvention + "\" (models.md)");
+  m.u_t_m_s = f.attr_double("/", "u_t_m_s");
+  m.l_char_m = f.attr_double("/", "l_char_m");
+  m.phi_crit = f.attr_double("/", "phi_crit");
+  m.h_max = f.attr_double("/", "h_max");
+  m.diameter_m = f.attr_double("/", "diameter_m");
+  m.particle_density_kg_m3 = f.attr_double("/", "particle_density_kg_m3");
+  m.fluid_density_kg_m3 = f.attr_double("/", "fluid_density_kg_m3");
+  m.fluid_viscosity_Pa_s = f.attr_double("/", "fluid_viscosity_Pa_s");
+  m.gravity_m_s2 = f.attr_double("/", "gravity_m_s2");
+  if (!(m.l_char_m > 0) || !(m.phi_crit > 0 && m.phi_crit < 1) || !(m.h_max > 0 && m.h_max < 1))
+    throw InputError(path + ": l_char_m must be > 0, phi_crit and h_max in (0, 1)");
+  m.h_spline = read_spline(f, "/h");
+  m.log_a_spline = read_spline(f, "/log_a");
+  if (!f.exists("/c_corr")) throw InputError(path + ": drag model file lacks the group /c_corr");
+  m.c_corr_a = f.attr_double("/c_corr", "a");
+  m.c_corr_k = f.attr_double("/c_corr", "k");
+  m.c_corr_source = f.attr_string("/c_corr", "source");
+  f.close();
+  m.checksum = file_checksum_fnv1a(path);
+  return m;
+}
+
+void check_model_matches_scene(const DragModel& model, const Scene& scene) {
+  const std::string where = model.path + " (model) and " + scene.source_path + " (scene)";
+  if (!scene.fluid) throw InputError(where + ": the scene has no [fluid] section; a drag model needs one");
+  auto same = [](double a, double b) { return std::abs(a - b) <= 1e-6 * std::max(std::abs(a), std::abs(b)); };
+  auto compare = [&](const char* scene_key, const char* model_key, double scene_value, double model_value) {
+    if (!same(scene_value, model_value))
+      throw InputError(where + " are for different particle/fluid systems: " + scene_key + " = " +
+                       number(scene_value) + " in the scene, " + model_key + " = " + number(model_value) +
+                       " in the model file; fit a model for this system or use its scene");
+  };
+  const Vec3& g = scene.domain.gravity_m_s2;
+  compare("particles.diameter", "diameter_m", scene.particles.diameter_m, model.diameter_m);
+  compare("particles.density", "particle_density_kg_m3", scene.particles.density_kg_m3,
+          model.particle_density_kg_m3);
+  compare("fluid.density", "fluid_density_kg_m3", scene.fluid->density_kg_m3, model.fluid_density_kg_m3);
+  compare("fluid.viscosity", "fluid_viscosity_Pa_s", scene.fluid->viscosity_Pa_s, model.fluid_viscosity_Pa_s);
+  compare("|domain.gravity|", "gravity_m_s2", std::sqrt(g[0] * g[0] + g[1] * g[1] + g[2] * g[2]),
+          model.gravity_m_s2);
+  compare("L_char (derived)", "l_char_m", scene.derived.l_char_m, model.l_char_m);
+}
+
+}  // namespace cgd

@@ -1,0 +1,184 @@
+#pragma once
+// Filtered (coarse-grid) drag laws as evaluators, like the microscopic laws of core/drag.hpp.
+//
+// Model (Radl & Sundaresan 2014, Chem. Eng. Sci. 117:416, the journal version of the paper's eqs. 6-9;
+// models.md, "Filtered drag model"):
+//   beta_bar_p = c_corr(alpha) [1 - h(phi) / (1 + a(phi) F)] beta_p,micro(phi, |u - v|),
+//   F = L_char / Delta,   Delta = cube root of the fluid cell volume of the run using the law,
+//   c_corr(alpha) = a_c + (1 - a_c) exp(-k_c (alpha - 1)),   alpha = d_parcel / d_prim,
+// phi the solids fraction at the particle, L_char = (u_t^2/g) Fr_p^(-2/3) with models.md's u_t
+// (Schiller-Naumann). The correction factor depends on phi only, not on the slip, so the filtered
+// law keeps every property of its microscopic base law that the engine relies on (beta_p w increasing
+// in w; beta_p(w) >= beta_p(0)), and 0 < beta_bar <= beta_micro when 0 <= h < 1, a > 0, alpha >= 1,
+// 0 <= a_c <= 1.
+//
+// Two sources of the master curves h(phi), a(phi):
+//   Radl2014Curves  the published piecewise cubics (data/reference/radl2014-filtered-drag.csv), base
+//                   law Beetstra, c_corr with the paper's a_c = 0, k_c = 0.05;
+//   SplineCurves    a model file written by cgd-fit (docs/schema-drag-model.md): B-splines of h and
+//                   log a with their extensions below phi_crit and above the fitted range.
+// Hot loops choose the law once with visit_any_drag_law (no virtual call per particle).
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "core/checksum.hpp"
+#include "core/drag.hpp"
+#include "core/scene.hpp"
+
+namespace cgd {
+
+/// Parcel-size correction of the paper's eq. 9: c_corr = a_c + (1 - a_c) exp(-k_c (alpha - 1)).
+/// (Radl & Sundaresan 2014, proceedings paper, eq. 9; paper values a_c = 0, k_c = 0.05.)
+double parcel_correction(double alpha, double a_c, double k_c);
+
+/// The published master curves of Radl & Sundaresan (2014), as implemented in MFiX (drag_gs.f,
+/// DRAG_RADL) and CFDEMcoupling-PFM (forceModel BeetstraDrag): piecewise cubics in x = phi - phi0,
+/// value = c0 + c1 x + c2 x^2 + c3 x^3 on phi_lo <= phi < phi_hi. The two implementations disagree
+/// in one coefficient, a(phi) on 0.25-0.40: c1 = -8.82 (MFiX) or -8.20 (CFDEMcoupling-PFM). This code
+/// uses c1 = -8.82, as data/reference/radl2014-filtered-drag.csv does: it keeps a(phi) continuous at
+/// 0.40 (1.785 against the next piece's 1.79; -8.20 would jump 1.878 -> 1.79). Kept as published:
+/// a(phi) jumps at phi_crit = 0.016 (21.51 -> 1.96 + 29.4 * 0.016 + ... = 2.465), h = 7.97 phi below
+/// 0.03 and h = 0 at phi >= 0.60. phi outside [0, 1) is clamped into it.
+struct Radl2014Curves {
+  static constexpr double kPhiCrit = 0.016;
+  static constexpr double kCcorrA = 0.0, kCcorrK = 0.05;  // the paper's c_corr parameters
+  double h(double phi) const;
+  double a(double phi) const;
+};
+
+/// A B-spline s(x) = sum_j c_j B_j,k(x) of order k (degree k - 1) on the full knot vector t
+/// (n + k knots, non-decreasing, the first and last k equal: clamped), evaluated with de Boor's
+/// algorithm. x outside [t_{k-1}, t_n] is clamped into it. The same numbers evaluated with numpy's
+/// de Boor (docs/schema-drag-model.md) give the same value to round-off.
+struct BSpline {
+  int order = 4;                     // k
+  std::vector<double> knots;         // t, size n + k
+  std::vector<double> coefficients;  // c, size n
+  double operator()(double x) const;
+  double lower() const { return knots[static_cast<std::size_t>(order - 1)]; }
+  double upper() const { return knots[coefficients.size()]; }
+};
+
+/// A drag model file (cgd_format = "drag_model", docs/schema-drag-model.md) as read by
+/// load_drag_model: what the evaluator needs and what a run checks against its own scene.
+struct DragModel {
+  std::string path;      // as given
+  std::string checksum;  // FNV-1a 64-bit of the file's bytes, 16 hex digits
+  DragLaw base_law = DragLaw::Beetstra;
+  std::string u_t_convention;  // "schiller-naumann" (models.md)
+  double u_t_m_s = 0, l_char_m = 0, phi_crit = 0.016;
+  double diameter_m = 0, particle_density_kg_m3 = 0, fluid_density_kg_m3 = 0, fluid_viscosity_Pa_s = 0;
+  double gravity_m_s2 = 0;  // |g|
+  BSpline h_spline;         // h on [phi_crit, phi_max] (identity, clamped to [0, h_max])
+  BSpline log_a_spline;     // log a on [phi_crit, phi_max]
+  double h_max = 0.99;      // upper clamp of h (h < 1 keeps beta_bar > 0)
+  double c_corr_a = 0.0, c_corr_k = 0.05;
+  std::string c_corr_source;  // "paper" (Radl & Sundaresan 2014) or "parcel-fit"
+};
+
+/// Master curves of a fitted model (docs/schema-drag-model.md, "Evaluating h and a"):
+///   h(phi) = clamp(S_h(phi), 0, h_max)                  for phi_crit <= phi <= phi_max,
+///          = h(phi_crit) * max(phi, 0) / phi_crit        for phi < phi_crit (linear to 0, the paper's
+///                                                        suggestion), h(phi_max) above phi_max;
+///   a(phi) = exp(S_log_a(clamp(phi, phi_crit, phi_max)))   (> 0, continuous, constant outside).
+/// phi_max is the upper end of the splines' knot vectors.
+struct SplineCurves {
+  const DragModel* model = nullptr;
+  double h(double phi) const;
+  double a(double phi) const;
+};
+
+/// A filtered drag law: the correction of the file's header times the microscopic base law.
+/// `params` are the base law's (rho_f, mu_f, primary d), so homogeneous_slip_speed() works on it.
+template <class Micro, class Curves>
+struct FilteredDrag {
+  using Params = DragParams;
+  Params params;
+  Micro micro;
+  Curves curves;
+  double filter_ratio = 0;  // F = L_char / Delta
+  double c_corr = 1;        // c_corr(alpha)
+
+  FilteredDrag(const Micro& base, const Curves& c, double F, double parcel_corr)
+      : params(base.params), micro(base), curves(c), filter_ratio(F), c_corr(parcel_corr) {}
+
+  /// beta_bar / beta_micro (dimensionless) at solids fraction phi.
+  double correction(double phi) const {
+    return c_corr * (1.0 - curves.h(phi) / (1.0 + curves.a(phi) * filter_ratio));
+  }
+  double reynolds(double phi, double slip_speed) const { return micro.reynolds(phi, slip_speed); }
+  double beta_p(double phi, double slip_speed) const {
+    return correction(phi) * micro.beta_p(phi, slip_speed);
+  }
+};
+
+/// What a filtered law needs besides DragParams, fixed for a run: the model file (for
+/// DragLaw::Model), the filter width Delta and L_char that give F, and the parcel size alpha.
+struct FilteredDragSetup {
+  std::shared_ptr<const DragModel> model;  // required for DragLaw::Model
+  double filter_width_m = 0;               // Delta: cube root of the fluid cell volume
+  double l_char_m = 0;                     // L_char of the run (models.md convention)
+  double parcel_size = 1;                  // alpha
+};
+
+/// The setup of a run's drag law from its scene: for drag = "model" the model file fluid.drag_model is
+/// read and checked against the scene (check_model_matches_scene); Delta = cube root of the cell
+/// volume (cell_spacing_m), L_char from the scene's derived scales, alpha = particles.parcel_size.
+/// Microscopic laws get an empty setup (nothing read). InputError as load_drag_model and
+/// check_model_matches_scene.
+FilteredDragSetup filtered_drag_setup(const Scene& scene, const Vec3& cell_spacing_m);
+
+/// InputError unless `setup` is complete for `law` (model present for Model, Delta, L_char > 0,
+/// alpha >= 1). Micro laws need nothing.
+void check_filtered_setup(DragLaw law, const FilteredDragSetup& setup);
+
+/// Like visit_drag_law, for every law including the filtered ones: chooses the evaluator once and
+/// calls visit(evaluator). For Radl2014 the base law is Beetstra (the published model's) and c_corr
+/// uses the paper's a_c = 0, k_c = 0.05; for Model, the file's base law, L_char and c_corr. F is
+/// setup.l_char_m / setup.filter_width_m for Radl2014 and model->l_char_m / filter_width_m for Model
+/// (the model's L_char equals the run's when check_model_matches_scene passed).
+template <class Visitor>
+decltype(auto) visit_any_drag_law(DragLaw law, const DragParams& params, const FilteredDragSetup& setup,
+                                  Visitor&& visit) {
+  if (law == DragLaw::Radl2014) {
+    check_filtered_setup(law, setup);
+    const double F = setup.l_char_m / setup.filter_width_m;
+    const double corr =
+        parcel_correction(setup.parcel_size, Radl2014Curves::kCcorrA, Radl2014Curves::kCcorrK);
+    return visit(FilteredDrag<BeetstraDrag, Radl2014Curves>(BeetstraDrag(params), Radl2014Curves{}, F, corr));
+  }
+  if (law == DragLaw::Model) {
+    check_filtered_setup(law, setup);
+    const DragModel& m = *setup.model;
+    const double F = m.l_char_m / setup.filter_width_m;
+    const double corr = parcel_correction(setup.parcel_size, m.c_corr_a, m.c_corr_k);
+    const SplineCurves curves{&m};
+    return visit_drag_law(m.base_law, params, [&](const auto& micro) {
+      return visit(FilteredDrag<std::decay_t<decltype(micro)>, SplineCurves>(micro, curves, F, corr));
+    });
+  }
+  return visit_drag_law(law, params, std::forward<Visitor>(visit));
+}
+
+/// beta_p of any law (kg m^-3 s^-1), for code that is not hot.
+double beta_p(DragLaw law, const DragParams& params, const FilteredDragSetup& setup, double phi,
+              double slip_speed);
+
+/// Read a model file. InputError naming the file (and the key) if it is missing, not HDF5, not a
+/// drag_model file, of another format version, or incomplete. Reads on the calling process only
+/// (MPI_COMM_SELF).
+DragModel load_drag_model(const std::string& path);
+
+/// InputError naming `model.path`, the scene's file and the differing key, unless the model was made
+/// for the scene's particle/fluid system: particles.diameter, particles.density, fluid.density,
+/// fluid.viscosity and |domain.gravity| (relative 1e-6, the files store them to full precision), and
+/// the derived L_char (relative 1e-6). The model's base law must be a microscopic law (a model file
+/// cannot be based on another filtered law).
+void check_model_matches_scene(const DragModel& model, const Scene& scene);
+
+/// "schiller-naumann": the u_t convention of models.md that every cgd file uses.
+inline constexpr const char* kUtConvention = "schiller-naumann";
+
+}  // namespace cgd

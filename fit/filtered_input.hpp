@@ -1,0 +1,57 @@
+#pragma once
+// The fitter's view of filtered files (cgd_format = "filtered", docs/schema-filtered.md): what cgd-fit
+// reads from each, and the checks that files pooled into one fit describe the same physics.
+#include <cmath>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "core/scene.hpp"
+
+namespace cgd::fit {
+
+/// The physics the runs of a filtered file share (its root attributes). Files pooled into one fit
+/// must agree on every field (check_same_physics).
+struct Physics {
+  std::string micro_drag;  // beetstra, wen-yu, stokes
+  double u_t_m_s = 0, l_char_m = 0, diameter_m = 0, particle_density_kg_m3 = 0, fluid_density_kg_m3 = 0,
+         fluid_viscosity_Pa_s = 0;
+};
+
+/// One filter width of one file (`/width_<k>`, or `/whole_box`), per phi bin.
+struct WidthSeries {
+  std::string group;  // "/width_0", ..., "/whole_box"
+  double F = 0;       // L_char / width
+  double width_m = 0;
+  double width_over_cell = NAN;  // attribute width_over_cell (NaN when absent: not checked)
+  bool whole_box = false;
+  std::vector<double> H, H_low, H_high, phi_mean;  // per bin (NaN where the bin is empty)
+  std::vector<std::int64_t> count;                 // particle samples per bin
+  // per-snapshot sums (n_snapshots x n_bins, row-major), empty when the file has no /per_snapshot
+  std::vector<double> numerator, micro;
+  std::vector<std::int64_t> snapshot_count;
+};
+
+struct FilteredFile {
+  std::string path, checksum;
+  std::string scene_toml;  // root attribute `scene`
+  Physics physics;
+  std::vector<double> phi_edges;       // /bins/phi_edges
+  std::vector<WidthSeries> widths;     // the box widths in file order, then /whole_box if present
+  std::vector<std::string> run_paths;  // /runs paths
+  std::vector<std::int64_t> snapshot_run, snapshot_block;  // /snapshots/run_index, block
+  bool has_per_snapshot = false;
+  std::size_t bins() const { return phi_edges.empty() ? 0 : phi_edges.size() - 1; }
+  std::size_t snapshots() const { return snapshot_run.size(); }
+  std::size_t runs() const { return run_paths.size(); }
+};
+
+/// Read one filtered file. InputError naming the file and the key if it is missing, not HDF5, not
+/// cgd_format = "filtered", of another version, or lacks (or has inconsistent) required datasets.
+FilteredFile read_filtered_file(const std::string& path);
+
+/// InputError naming both files and the key unless every file has the same physics (micro_drag
+/// exactly; u_t, L_char, d_p, densities, viscosity to 1e-6 relative) and the same /bins/phi_edges.
+void check_same_physics(const std::vector<FilteredFile>& files);
+
+}  // namespace cgd::fit

@@ -1,0 +1,73 @@
+// cgd-fit: filtered files -> drag model file (design.md "Command lines"; docs/fit.md). A thin driver:
+// parse, read and check every input (nothing is written before that succeeds), fit, report, write.
+#include <mpi.h>
+
+#include <CLI/CLI.hpp>
+#include <filesystem>
+#include <iostream>
+#include <string>
+#include <vector>
+
+#include "core/cli.hpp"
+#include "core/error.hpp"
+#include "core/scene.hpp"
+#include "fit/filtered_input.hpp"
+#include "fit/fitter.hpp"
+
+int main(int argc, char** argv) {
+  MPI_Init(&argc, &argv);
+  const int status = cgd::run_tool([&] {
+    std::vector<std::string> inputs;
+    std::string output;
+    bool quiet = false;
+    cgd::fit::FitOptions options;
+    CLI::App app{
+        "Fit the filtered drag model H(F, phi) = h(phi)/(1 + a(phi) F) to filtered files (cgd-filter) "
+        "and write a drag model file (docs/fit.md)",
+        "cgd-fit"};
+    app.add_option("filtered", inputs, "Filtered files (cgd-filter), pooled into one fit")
+        ->required()
+        ->type_name("FILTERED.h5...");
+    app.add_option("-o,--output", output, "Model file to write")->required()->type_name("MODEL.h5");
+    app.add_option("--min-count", options.min_count,
+                   "Particle samples a (width, bin) needs to be used (default 100)")
+        ->check(CLI::PositiveNumber);
+    app.add_option("--min-widths", options.min_widths, "Distinct widths a bin needs (default 3, at least 3)")
+        ->check(CLI::Range(3, 1000));
+    app.add_option("--bootstrap", options.bootstrap,
+                   "Bootstrap replicates for the bands (default 400; 0: none)")
+        ->check(CLI::Range(0, 100000));
+    app.add_option("--seed", options.seed, "Seed of the bootstrap (default 1)");
+    app.add_option(
+           "--min-width-over-cell", options.min_width_over_cell,
+           "Narrower filters (in fluid cells) are not fitted, only checked (default 2: a one-cell filter "
+           "averages nothing below the grid)")
+        ->check(CLI::Range(0.0, 1e6));
+    app.add_option("--phi-crit", options.phi_crit, "Below it h -> 0 linearly (default 0.016, the paper's)")
+        ->check(CLI::Range(1e-6, 0.5));
+    app.add_option("--breakpoints", options.breakpoints,
+                   "Spline breakpoints (default: from the bin count, 5..15)")
+        ->check(CLI::Range(4, 100));
+    app.add_flag(
+        "--no-cross-validation", [&](std::int64_t) { options.cross_validate = false; },
+        "Skip the leave-one-run-out cross-validation");
+    app.add_flag("--quiet", quiet, "Print no report");
+    cgd::parse_command_line(app, argc, argv, "cgd-fit");
+
+    // every input read and checked before anything is written
+    std::vector<cgd::fit::FilteredFile> files;
+    for (const std::string& path : inputs) files.push_back(cgd::fit::read_filtered_file(path));
+    cgd::fit::check_same_physics(files);
+    const cgd::Scene scene =
+        cgd::load_scene_from_string(files.front().scene_toml, files.front().path + " (scene)");
+    const std::filesystem::path parent = std::filesystem::absolute(output).parent_path();
+    if (!std::filesystem::is_directory(parent))
+      throw cgd::InputError(output + ": cannot write the model file: no directory " + parent.string());
+    const cgd::fit::FitResult result = cgd::fit::fit_filtered_drag(files, options, nullptr);
+    cgd::fit::write_model_file(output, result, files, options, scene);
+    if (!quiet) std::cout << cgd::fit::fit_report(result, files, options) << "wrote " << output << "\n";
+    return cgd::kExitOk;
+  });
+  MPI_Finalize();
+  return status;
+}

@@ -1,0 +1,137 @@
+#!/usr/bin/python3
+"""Plot a drag model file of cgd-fit (docs/schema-drag-model.md).
+
+Left: h(phi) with its 95 % band and the per-bin estimates (the paper's Figure 1); middle: a(phi) the
+same way; right: H(F, phi) = h/(1 + aF) against F for a few phi, with bands at the data's widths.
+Radl & Sundaresan 2014 (the published piecewise cubics, data/reference/radl2014-filtered-drag.csv) is
+drawn beside the fit, dashed.
+
+    /usr/bin/python3 tools/plot_model.py out/fit/model.h5 -o out/fit/model.png
+"""
+import argparse
+import os
+
+import h5py
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+
+
+def de_boor(t, c, k, x):
+    n = len(c)
+    x = min(max(x, t[k - 1]), t[n])
+    i = min(max(int(np.searchsorted(t[:n], x, side="right")) - 1, k - 1), n - 1)
+    d = [c[j + i - k + 1] for j in range(k)]
+    for r in range(1, k):
+        for j in range(k - 1, r - 1, -1):
+            left, right = t[j + i - k + 1], t[j + 1 + i - r]
+            alpha = (x - left) / (right - left) if right > left else 0.0
+            d[j] = (1 - alpha) * d[j - 1] + alpha * d[j]
+    return d[k - 1]
+
+
+def radl2014():
+    """h(phi), a(phi) of the published model from the reference csv."""
+    here = os.path.dirname(os.path.abspath(__file__))
+    rows = {"a": [], "h": []}
+    with open(os.path.join(here, "..", "data", "reference", "radl2014-filtered-drag.csv")) as f:
+        for line in f:
+            if line.startswith("#") or line.startswith("function") or not line.strip():
+                continue
+            fn, *v = line.strip().split(",")
+            rows[fn].append([float(x) for x in v])
+
+    def curve(fn):
+        def value(phi):
+            for lo, hi, p0, c0, c1, c2, c3 in rows[fn]:
+                if lo <= phi < hi:
+                    x = phi - p0
+                    return c0 + c1 * x + c2 * x * x + c3 * x ** 3
+            return rows[fn][-1][3]
+        return np.vectorize(value)
+
+    return curve("h"), curve("a")
+
+
+def main():
+    p = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    p.add_argument("model")
+    p.add_argument("-o", "--output", default=None, help="image file (default: MODEL with .png)")
+    args = p.parse_args()
+    out = args.output or os.path.splitext(args.model)[0] + ".png"
+    with h5py.File(args.model, "r") as f:
+        b = {k: f["bands"][k][()] for k in f["bands"]}
+        data = {k: f["data"][k][()] for k in f["data"]} if "data" in f else None
+        bins = {k: f["bins"][k][()] for k in f["bins"]}
+        th, ch, kh = f["h/knots"][()], f["h/coefficients"][()], int(f["h"].attrs["order"])
+        phi_crit, h_max = float(f.attrs["phi_crit"]), float(f.attrs["h_max"])
+        base = f.attrs["base_drag"]
+        cv = f["diagnostics"].attrs["cv_rms_H"]
+    rh, ra = radl2014()
+    phi = b["phi"]
+    bound = bins["used"] == 1
+    if "at_bound" in bins:
+        bound &= bins["at_bound"] == 1
+    else:
+        bound &= False
+    used = (bins["used"] == 1) & ~bound  # bins at a bound: open symbols, no error bars
+    fig, ax = plt.subplots(1, 3, figsize=(15, 4.5))
+    ax[0].fill_between(phi, b["h_low"], b["h_high"], alpha=0.3, label="95 % band")
+    ax[0].plot(phi, b["h"], label="fit (P-spline)")
+    # per-bin errors: the bootstrap's (widths' correlation included) when the file has them
+    se_h = bins.get("h_stderr_bootstrap", bins["h_stderr"])
+    se_log_a = bins.get("log_a_stderr_bootstrap", bins["log_a_stderr"])
+    ax[0].errorbar(bins["phi"][used], bins["h"][used], yerr=1.96 * se_h[used], fmt="o", ms=3,
+                   label="per-bin fit")
+    if bound.any():
+        ax[0].plot(bins["phi"][bound], bins["h"][bound], "o", mfc="none", ms=5, label="per-bin fit at a bound")
+    ax[0].plot(phi, rh(phi), "k--", label="Radl & Sundaresan 2014")
+    ax[0].set_ylim(-0.2, 1.05)
+    ax[0].axvline(phi_crit, color="grey", lw=0.5)
+    ax[0].set(xlabel=r"$\bar\phi_p$", ylabel="h", title="h: largest drag correction (F -> 0)")
+    ax[0].legend(fontsize=8)
+    ax[1].fill_between(phi, b["a_low"], b["a_high"], alpha=0.3)
+    ax[1].plot(phi, b["a"], label="fit")
+    a_err = np.vstack([bins["a"][used] * (1 - np.exp(-1.96 * se_log_a[used])),
+                       bins["a"][used] * (np.exp(1.96 * se_log_a[used]) - 1)])
+    ax[1].errorbar(bins["phi"][used], bins["a"][used], yerr=a_err, fmt="o", ms=3, label="per-bin fit")
+    if bound.any():
+        ax[1].plot(bins["phi"][bound], bins["a"][bound], "o", mfc="none", ms=5, label="per-bin fit at a bound")
+    ax[1].plot(phi, ra(phi), "k--", label="Radl & Sundaresan 2014")
+    ax[1].set_ylim(min(b["a"].min(), 1.0) / 5, max(b["a"].max(), 25.0) * 5)
+    ax[1].set(xlabel=r"$\bar\phi_p$", ylabel="a", yscale="log", title="a: width dependence 1/(1 + aF)")
+    ax[1].legend(fontsize=8)
+    F = np.geomspace(max(b["F"].min() / 3, 1e-3), b["F"].max() * 3, 100)
+    for target in (0.05, 0.1, 0.2, 0.3, 0.4):
+        if target > phi[-1]:
+            continue
+        if data is not None:  # the bin nearest to the target, its data at every width
+            j = int(np.nanargmin(abs(data["phi"] - target)))
+            if not np.any(np.isfinite(data["H"][:, j])):
+                continue
+            p_j = data["phi"][j]
+        else:
+            p_j = target
+        i = int(np.argmin(abs(phi - p_j)))
+        line, = ax[2].plot(F, b["h"][i] / (1 + b["a"][i] * F), label=rf"$\bar\phi$ = {phi[i]:.2f}")
+        ax[2].fill_between(b["F"], b["H_low"][:, i], b["H_high"][:, i], color=line.get_color(), alpha=0.2)
+        if data is not None:
+            fitted = data["fitted"] == 1
+            for mask, marker in ((fitted, "o"), (~fitted, "s")):
+                ax[2].errorbar(data["F"][mask], data["H"][mask, j], yerr=1.96 * data["H_sigma"][mask, j], fmt=marker,
+                               ms=3, color=line.get_color(), mfc=None if marker == "o" else "none")
+        ax[2].plot(F, rh(phi[i]) / (1 + ra(phi[i]) * F), "--", color=line.get_color(), lw=0.8)
+    ax[2].set(xscale="log", xlabel=r"F = L$_{char}/\Delta$", ylabel=r"H = 1 - $\bar\beta/\beta_{micro}$",
+              title="H against F (squares: not fitted; dashed: Radl 2014)")
+    ax[2].legend(fontsize=8)
+    cv_text = f"{cv:.3g}" if np.isfinite(cv) else "n/a (one run)"
+    fig.suptitle(f"{os.path.basename(args.model)}: base law {base}, leave-one-run-out CV rms of H = {cv_text}")
+    fig.tight_layout()
+    fig.savefig(out, dpi=110)
+    print(f"wrote {out}")
+
+
+if __name__ == "__main__":
+    main()
