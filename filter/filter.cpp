@@ -162,7 +162,10 @@ FilterPlan plan_filter(const FilterOptions& o) {
     plan.widths_m = default_widths_m(r0.grid, shortest);
   } else {
     for (double w : o.widths_over_dp) {
-      const double wm = w * d;
+      double wm = w * d;
+      // widths typed with 3 digits (3.33 for a cell of 3.333 d_p) mean the limit: within 0.5 %, clamp
+      if (wm < h_max && wm >= h_max * (1.0 - 5e-3)) wm = h_max;
+      if (wm > shortest && wm <= shortest * (1.0 + 5e-3)) wm = shortest;
       if (!(wm >= h_max * (1.0 - 1e-9)) || !(wm <= shortest * (1.0 + 1e-9)))
         throw InputError("--widths: " + fmt(w) + " d_p is not allowed: a filter width lies between one cell (" +
                          fmt(h_max / d) + " d_p) and the shortest box edge (" + fmt(shortest / d) + " d_p)");
