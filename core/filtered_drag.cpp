@@ -118,6 +118,7 @@ FilteredDragSetup filtered_drag_setup(const Scene& scene, const Vec3& cell_spaci
   setup.filter_width_m = std::cbrt(cell_spacing_m[0] * cell_spacing_m[1] * cell_spacing_m[2]);
   setup.l_char_m = scene.derived.l_char_m;
   setup.parcel_size = scene.particles.parcel_size;
+  setup.parcel_correction = scene.fluid->parcel_correction;
   if (scene.fluid->drag == DragLaw::Model) {
     auto model = std::make_shared<DragModel>(load_drag_model(scene.fluid->drag_model_path));
     check_model_matches_scene(*model, scene);

@@ -121,6 +121,7 @@ struct FilteredDragSetup {
   double filter_width_m = 0;               // Delta: cube root of the fluid cell volume
   double l_char_m = 0;                     // L_char of the run (models.md convention)
   double parcel_size = 1;                  // alpha
+  bool parcel_correction = true;           // false: c_corr = 1 (fluid.parcel_correction = false)
 };
 
 /// The setup of a run's drag law from its scene: for drag = "model" the model file fluid.drag_model is
@@ -145,15 +146,16 @@ decltype(auto) visit_any_drag_law(DragLaw law, const DragParams& params, const F
   if (law == DragLaw::Radl2014) {
     check_filtered_setup(law, setup);
     const double F = setup.l_char_m / setup.filter_width_m;
-    const double corr =
-        parcel_correction(setup.parcel_size, Radl2014Curves::kCcorrA, Radl2014Curves::kCcorrK);
+    const double corr = setup.parcel_correction ? parcel_correction(setup.parcel_size, Radl2014Curves::kCcorrA,
+                                                                    Radl2014Curves::kCcorrK)
+                                                : 1.0;
     return visit(FilteredDrag<BeetstraDrag, Radl2014Curves>(BeetstraDrag(params), Radl2014Curves{}, F, corr));
   }
   if (law == DragLaw::Model) {
     check_filtered_setup(law, setup);
     const DragModel& m = *setup.model;
     const double F = m.l_char_m / setup.filter_width_m;
-    const double corr = parcel_correction(setup.parcel_size, m.c_corr_a, m.c_corr_k);
+    const double corr = setup.parcel_correction ? parcel_correction(setup.parcel_size, m.c_corr_a, m.c_corr_k) : 1.0;
     const SplineCurves curves{&m};
     return visit_drag_law(m.base_law, params, [&](const auto& micro) {
       return visit(FilteredDrag<std::decay_t<decltype(micro)>, SplineCurves>(micro, curves, F, corr));

@@ -89,6 +89,7 @@ void write_params(h5::File& f, const Scene& s) {
     f.set_attr(g, "coupling", std::string(to_string(fl.coupling)));
     f.set_attr(g, "drag", std::string(to_string(fl.drag)));
     f.set_attr(g, "pressure_gradient_force", flag(fl.pressure_gradient_force));
+    f.set_attr(g, "parcel_correction", flag(fl.parcel_correction));
   }
 
   // [run]

@@ -119,7 +119,8 @@ const std::vector<SectionSpec>& schema() {
         {"drag", Kind::String, "microscopic drag law"},
         {"drag_model", Kind::String, "path of the drag model file (cgd-fit) used by drag = \"model\""},
         {"drag_model_checksum", Kind::String, "FNV-1a checksum of fluid.drag_model (recorded by cgd)"},
-        {"pressure_gradient_force", Kind::Boolean, "apply -V_p grad p to the particles"}}},
+        {"pressure_gradient_force", Kind::Boolean, "apply -V_p grad p to the particles"},
+        {"parcel_correction", Kind::Boolean, "apply c_corr(alpha) of a filtered law (false: the parcel fit's runs)"}}},
       {"run",
        {{"end_time", Kind::Number, "s, simulated time"},
         {"end_time_tref", Kind::Number, "simulated time in units of t_ref = u_t/g"},
@@ -688,6 +689,7 @@ Scene build_scene(const SceneReader& in) {
                                  {"model", DragLaw::Model}},
                                 f.drag);
     if (auto v = in.boolean("fluid", "pressure_gradient_force")) f.pressure_gradient_force = *v;
+    if (auto v = in.boolean("fluid", "parcel_correction")) f.parcel_correction = *v;
     if (auto v = in.string("fluid", "drag_model")) f.drag_model_path = *v;
     if (auto v = in.string("fluid", "drag_model_checksum")) f.drag_model_checksum = *v;
     if (f.drag == DragLaw::Model && f.drag_model_path.empty())

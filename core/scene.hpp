@@ -51,6 +51,7 @@ struct FluidConfig {
   Coupling coupling = Coupling::TwoWay;
   DragLaw drag = DragLaw::Beetstra;
   bool pressure_gradient_force = true;
+  bool parcel_correction = true;      // filtered laws: c_corr(alpha) on (false: c_corr = 1, for the parcel fit)
   std::string drag_model_path;        // fluid.drag_model: model file of drag = "model" (cgd-fit), as given
   std::string drag_model_checksum;    // its FNV-1a checksum (16 hex digits), recorded in the effective scene
 };

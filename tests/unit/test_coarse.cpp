@@ -7,6 +7,7 @@
 
 #include "coarse/coarse.hpp"
 #include "core/error.hpp"
+#include "core/filtered_drag.hpp"
 #include "core/scene.hpp"
 #include "core/time_average.hpp"
 
@@ -77,6 +78,27 @@ TEST(CoarseChecks, RefusesParcelsWiderThanACellTooFewParcelsThinSlabsAndAnEmptyW
   // 24 rows over 13 ranks: the thinnest slab is 1 row = 7.5 d_p, the cutoff of 7 d_p parcels 8.05 d_p
   refused(std::string(seven).replace(seven.find("solids_fraction = 0.05"), 22, "solids_fraction = 0.30"), 13,
           "thinner than the contact cutoff");
+}
+
+}  // namespace
+}  // namespace cgd
+
+namespace cgd {
+namespace {
+
+TEST(CoarseChecks, ParcelCorrectionSwitchedOffGivesTheGridModelAlone) {
+  // fluid.parcel_correction = false (the parcel fit's runs): beta of alpha = 4 parcels equals the
+  // alpha = 1 value; on, it is c_corr(4) = exp(-0.05 x 3) = 0.8607 times that (the paper's a = 0, k = 0.05).
+  const std::string base = coarse_scene("parcel_size = 4", "drag = \"radl2014\"", "");
+  const Scene on = load_scene_from_string(base, "on.toml");
+  const Scene off = load_scene_from_string(base, "off.toml", {"fluid.parcel_correction=false"});
+  const Vec3 cell{7.5 * 75e-6, 7.5 * 75e-6, 7.5 * 75e-6};
+  const DragParams p{1.3, 1.8e-5, 75e-6};
+  FilteredDragSetup s_on = filtered_drag_setup(on, cell), s_off = filtered_drag_setup(off, cell);
+  const double b_on = beta_p(DragLaw::Radl2014, p, s_on, 0.1, 0.2), b_off = beta_p(DragLaw::Radl2014, p, s_off, 0.1, 0.2);
+  EXPECT_NEAR(b_on / b_off, std::exp(-0.05 * 3), 1e-14);
+  s_off.parcel_size = 1;
+  EXPECT_DOUBLE_EQ(beta_p(DragLaw::Radl2014, p, s_off, 0.1, 0.2), b_off);
 }
 
 }  // namespace
