@@ -657,6 +657,28 @@ void write_atomically(const std::string& final_path, MPI_Comm comm, const std::f
     throw RunError(final_path + ": cannot move the completed file into place (" + std::strerror(error) + ")");
 }
 
+void update_copy_atomically(const std::string& source_path, const std::string& final_path,
+                            const std::function<void(File&)>& body) {
+  // the copy is the file write_atomically's body fills: open it read-write and let `body` edit it
+  File source = File::open_read(source_path, MPI_COMM_SELF);  // a clear InputError if it is not HDF5
+  source.close();
+  write_atomically(final_path, MPI_COMM_SELF, [&](File& fresh) {
+    const std::string tmp = fresh.path();
+    fresh.close();
+    std::error_code ec;
+    std::filesystem::copy_file(source_path, tmp, std::filesystem::copy_options::overwrite_existing, ec);
+    if (ec) throw RunError(tmp + ": cannot copy " + source_path + " (" + ec.message() + ")");
+    Handle fapl(H5Pcreate(H5P_FILE_ACCESS), H5Pclose);
+    H5Pset_fapl_mpio(fapl.get(), MPI_COMM_SELF, MPI_INFO_NULL);
+    const hid_t id = H5Fopen(tmp.c_str(), H5F_ACC_RDWR, fapl.get());
+    if (id < 0) throw RunError(tmp + ": cannot open for update (" + hdf5_error_text() + ")");
+    File edit(id, tmp, MPI_COMM_SELF);
+    body(edit);
+    edit.close();
+    fresh = std::move(edit);  // closed: write_atomically's close() is then a no-op
+  });
+}
+
 bool is_hdf5(const std::string& path) {
   silence_hdf5_errors();
   std::error_code ec;

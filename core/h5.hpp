@@ -12,6 +12,10 @@
 
 namespace cgd::h5 {
 
+class File;
+void update_copy_atomically(const std::string& source_path, const std::string& final_path,
+                            const std::function<void(File&)>& body);
+
 class File {
  public:
   /// Create (truncate) `path` for parallel writing over `comm`. Collective.
@@ -76,6 +80,7 @@ class File {
                         const std::vector<std::uint64_t>& dims);
 
  private:
+  friend void update_copy_atomically(const std::string&, const std::string&, const std::function<void(File&)>&);
   File(hid_t file, std::string path, MPI_Comm comm) : file_(file), path_(std::move(path)), comm_(comm) {}
   hid_t file_ = -1;
   std::string path_;
@@ -86,6 +91,12 @@ class File {
 /// folder; after a collective close rank 0 fsyncs and renames it into place, so a reader (or a
 /// run killed at any moment) never sees a half-written file. Collective.
 void write_atomically(const std::string& final_path, MPI_Comm comm, const std::function<void(File&)>& body);
+
+/// Write `final_path` atomically as a modified copy of `source_path`: the source is copied to a temporary
+/// name, opened read-write for `body`, then moved into place as write_atomically does. Calling rank
+/// only (MPI_COMM_SELF). The source is never modified.
+void update_copy_atomically(const std::string& source_path, const std::string& final_path,
+                            const std::function<void(File&)>& body);
 
 /// True if `path` exists and is a readable HDF5 file.
 bool is_hdf5(const std::string& path);

@@ -13,6 +13,8 @@
 #include "core/scene.hpp"
 #include "fit/filtered_input.hpp"
 #include "fit/fitter.hpp"
+#include "fit/parcel_fit.hpp"
+#include "core/filtered_drag.hpp"
 
 int main(int argc, char** argv) {
   MPI_Init(&argc, &argv);
@@ -52,7 +54,25 @@ int main(int argc, char** argv) {
         "--no-cross-validation", [&](std::int64_t) { options.cross_validate = false; },
         "Skip the leave-one-run-out cross-validation");
     app.add_flag("--quiet", quiet, "Print no report");
+    std::string parcel_model;
+    app.add_option("--parcel-fit", parcel_model,
+                   "Parcel fit: the inputs are cgd-coarse run directories run with this model and "
+                   "fluid.parcel_correction = false (and --reference); fits c_corr(alpha) and writes a copy of "
+                   "MODEL.h5 with it (docs/fit.md)")
+        ->type_name("MODEL.h5");
     cgd::parse_command_line(app, argc, argv, "cgd-fit");
+
+    if (!parcel_model.empty()) {
+      const cgd::DragModel model = cgd::load_drag_model(parcel_model);
+      std::vector<cgd::fit::ParcelRun> runs;
+      for (const std::string& dir : inputs) runs.push_back(cgd::fit::read_parcel_run(dir, model.u_t_m_s));
+      const cgd::DragParams params{model.fluid_density_kg_m3, model.fluid_viscosity_Pa_s, model.diameter_m};
+      const cgd::fit::ParcelFitResult r =
+          cgd::fit::fit_parcel_correction(runs, model.base_law, params, 2000, static_cast<unsigned>(options.seed));
+      cgd::fit::write_parcel_fit(parcel_model, output, r);
+      if (!quiet) std::cout << cgd::fit::parcel_fit_report(r) << "wrote " << output << "\n";
+      return cgd::kExitOk;
+    }
 
     // every input read and checked before anything is written
     std::vector<cgd::fit::FilteredFile> files;
