@@ -1,0 +1,97 @@
+#!/usr/bin/python3
+"""The paper's Figures 2 and 3 from a study file (tools/study.py, Makefile.pipeline `study`):
+
+  Figure 2: time-averaged slip <u_slip,y>/u_t against the fluid cell size Delta/d_p (alpha = 1): the resolved
+            run, coarse CFD-DEM with the micro law (open) and with the filtered model (filled);
+  Figure 3: the same against the parcel size alpha on the coarsest grid (CFD-DPM), with and without the model,
+            the resolved value as a band.
+One panel column per solids fraction; error bars are batch-means standard errors. Prints the tables.
+
+usage: /usr/bin/python3 tools/figures.py STUDY.h5 [-o PREFIX]   (writes PREFIX_figure2.png, PREFIX_figure3.png)"""
+import argparse
+import os
+import sys
+
+import h5py
+import numpy as np
+
+
+def load(path):
+    f = h5py.File(path, "r")
+    if f.attrs.get("cgd_format") != "study":
+        sys.exit(f"figures: {path}: cgd_format is {f.attrs.get('cgd_format')!r}, expected 'study'")
+    dec = lambda v: v.decode() if isinstance(v, bytes) else str(v)
+    rows = []
+    for i in range(len(f["phi"])):
+        rows.append({k: (dec(f[k][i]) if f[k].dtype.kind in "OS" else float(f[k][i])) for k in
+                     ["phi", "cell_over_dp", "alpha", "drag", "slip", "slip_se", "ref_slip", "ref_se", "error", "error_se", "cost", "kind"]})
+    return rows
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("study")
+    ap.add_argument("-o", "--prefix", default=None)
+    a = ap.parse_args()
+    rows = load(a.study)
+    prefix = a.prefix or os.path.splitext(a.study)[0]
+    phis = sorted({r["phi"] for r in rows})
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    styles = {"micro": dict(mfc="white"), "model": dict()}
+    law = lambda r: "model" if r["drag"] == "model" else "micro"
+    # ---- Figure 2 ----
+    fig, axes = plt.subplots(1, len(phis), figsize=(4 * len(phis), 3.8), squeeze=False)
+    print("Figure 2: <u_slip,y>/u_t against Delta/d_p (alpha = 1)")
+    print(f"{'phi':>5} {'Delta/d_p':>9} {'law':>9} {'slip/u_t':>16} {'error %':>14} {'core-s/s':>9}")
+    for ax, phi in zip(axes[0], phis):
+        res = [r for r in rows if r["phi"] == phi and r["kind"] == "resolved"]
+        for r in res:
+            ax.errorbar(r["cell_over_dp"], r["slip"], yerr=r["slip_se"], fmt="s", color="r", label="resolved")
+            print(f"{phi:5.2f} {r['cell_over_dp']:9.2f} {'resolved':>9} {r['slip']:7.3f} +- {r['slip_se']:5.3f} {'':>14} {r['cost']:9.3g}")
+        for name, color in (("micro", "k"), ("model", "b")):
+            pts = sorted([r for r in rows if r["phi"] == phi and r["kind"] == "coarse" and r["alpha"] == 1 and law(r) == name
+                          and r["drag"] != "modelraw"], key=lambda r: r["cell_over_dp"])
+            for r in pts:
+                print(f"{phi:5.2f} {r['cell_over_dp']:9.2f} {name:>9} {r['slip']:7.3f} +- {r['slip_se']:5.3f} "
+                      f"{100 * r['error']:6.1f} +- {100 * r['error_se']:4.1f} {r['cost']:9.3g}")
+            if pts:
+                ax.errorbar([r["cell_over_dp"] for r in pts], [r["slip"] for r in pts], yerr=[r["slip_se"] for r in pts],
+                            fmt="o-", color=color, label="micro law" if name == "micro" else "filtered model", **styles[name])
+        ax.set_xlabel("Δ_fluid / d_p")
+        ax.set_title(f"⟨φ⟩ = {phi:g}", fontsize=10)
+        ax.set_ylabel("⟨u_slip,y⟩ / u_t")
+        ax.legend(fontsize=7)
+    fig.tight_layout()
+    fig.savefig(prefix + "_figure2.png", dpi=120)
+    # ---- Figure 3 ----
+    fig, axes = plt.subplots(1, len(phis), figsize=(4 * len(phis), 3.8), squeeze=False)
+    coarsest = max([r["cell_over_dp"] for r in rows if r["kind"] == "coarse"], default=0)
+    print(f"\nFigure 3: <u_slip,y>/u_t against alpha (Delta = {coarsest:.3g} d_p)")
+    print(f"{'phi':>5} {'alpha':>5} {'law':>9} {'slip/u_t':>16} {'error %':>14} {'core-s/s':>9}")
+    for ax, phi in zip(axes[0], phis):
+        for r in [r for r in rows if r["phi"] == phi and r["kind"] == "resolved"]:
+            ax.axhspan(r["slip"] - r["slip_se"], r["slip"] + r["slip_se"], color="r", alpha=0.2, label="resolved")
+            ax.axhline(r["slip"], color="r", lw=1)
+        for name, color in (("micro", "k"), ("model", "b")):
+            pts = sorted([r for r in rows if r["phi"] == phi and r["kind"] == "coarse" and abs(r["cell_over_dp"] - coarsest) < 1e-6
+                          and law(r) == name and r["drag"] != "modelraw"], key=lambda r: r["alpha"])
+            for r in pts:
+                print(f"{phi:5.2f} {r['alpha']:5.0f} {name:>9} {r['slip']:7.3f} +- {r['slip_se']:5.3f} "
+                      f"{100 * r['error']:6.1f} +- {100 * r['error_se']:4.1f} {r['cost']:9.3g}")
+            if pts:
+                ax.errorbar([r["alpha"] for r in pts], [r["slip"] for r in pts], yerr=[r["slip_se"] for r in pts],
+                            fmt="o-", color=color, label="micro law" if name == "micro" else "filtered model", **styles[name])
+        ax.set_xlabel("parcel size α")
+        ax.set_title(f"⟨φ⟩ = {phi:g}, Δ = {coarsest:.3g} d_p", fontsize=10)
+        ax.set_ylabel("⟨u_slip,y⟩ / u_t")
+        ax.legend(fontsize=7)
+    fig.tight_layout()
+    fig.savefig(prefix + "_figure3.png", dpi=120)
+    print(f"\nwrote {prefix}_figure2.png, {prefix}_figure3.png")
+
+
+if __name__ == "__main__":
+    main()
