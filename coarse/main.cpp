@@ -54,7 +54,9 @@ int main(int argc, char** argv) {
       std::optional<cgd::coarse::Comparison> cmp;
       if (!reference.empty())
         cmp = cgd::coarse::compare(s, cgd::coarse::summarise_run(reference, u_t, scene.run.sampling_start_s, 1, batches));
-      const std::string drag = to_string(scene.fluid->drag);  // "model": the file is in the scene's drag_model
+      // "model": the file is in the scene's drag_model; "model-raw": the model with c_corr off (parcel fit)
+      std::string drag = to_string(scene.fluid->drag);
+      if (scene.fluid->drag == cgd::DragLaw::Model && !scene.fluid->parcel_correction) drag = "model-raw";
       cgd::coarse::write_summary((std::filesystem::path(settings.output_dir) / "summary.h5").string(), scene, s, cmp, drag);
       std::cout << "cgd-coarse: " << cgd::coarse::describe(s) << "\n";
       if (cmp) std::cout << "cgd-coarse: " << cgd::coarse::describe(*cmp) << "\n";

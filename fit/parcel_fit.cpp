@@ -92,7 +92,8 @@ ParcelRun read_parcel_run(const std::string& run_dir, double u_t) {
   h5::File f = h5::File::open_read(path, MPI_COMM_SELF);
   if (!f.has_attr("/", "cgd_format") || f.attr_string("/", "cgd_format") != "coarse_summary")
     throw InputError(path + ": not a cgd-coarse summary (cgd_format 'coarse_summary' expected)");
-  if (f.attr_string("/", "drag") != "model")
+  const std::string drag = f.attr_string("/", "drag");
+  if (drag != "model" && drag != "model-raw")
     throw InputError(path + ": the run used drag '" + f.attr_string("/", "drag") +
                      "'; the parcel fit needs runs with the grid model (drag = \"model\")");
   // alpha = 1 runs are the same with c_corr on or off (c_corr(1) = 1)

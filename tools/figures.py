@@ -53,7 +53,7 @@ def main():
             print(f"{phi:5.2f} {r['cell_over_dp']:9.2f} {'resolved':>9} {r['slip']:7.3f} +- {r['slip_se']:5.3f} {'':>14} {r['cost']:9.3g}")
         for name, color in (("micro", "k"), ("model", "b")):
             pts = sorted([r for r in rows if r["phi"] == phi and r["kind"] == "coarse" and r["alpha"] == 1 and law(r) == name
-                          and r["drag"] != "modelraw"], key=lambda r: r["cell_over_dp"])
+                          and r["drag"] != "model-raw"], key=lambda r: r["cell_over_dp"])
             for r in pts:
                 print(f"{phi:5.2f} {r['cell_over_dp']:9.2f} {name:>9} {r['slip']:7.3f} +- {r['slip_se']:5.3f} "
                       f"{100 * r['error']:6.1f} +- {100 * r['error_se']:4.1f} {r['cost']:9.3g}")
@@ -77,7 +77,7 @@ def main():
             ax.axhline(r["slip"], color="r", lw=1)
         for name, color in (("micro", "k"), ("model", "b")):
             pts = sorted([r for r in rows if r["phi"] == phi and r["kind"] == "coarse" and abs(r["cell_over_dp"] - coarsest) < 1e-6
-                          and law(r) == name and r["drag"] != "modelraw"], key=lambda r: r["alpha"])
+                          and law(r) == name and r["drag"] != "model-raw"], key=lambda r: r["alpha"])
             for r in pts:
                 print(f"{phi:5.2f} {r['alpha']:5.0f} {name:>9} {r['slip']:7.3f} +- {r['slip_se']:5.3f} "
                       f"{100 * r['error']:6.1f} +- {100 * r['error_se']:4.1f} {r['cost']:9.3g}")

@@ -114,7 +114,7 @@ def main():
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
     fig, ax = plt.subplots(figsize=(7.5, 5))
-    markers = {"beetstra": "o", "wen-yu": "s", "model": "^", "radl2014": "v"}
+    markers = {"beetstra": "o", "wen-yu": "s", "model": "^", "model-raw": "x", "radl2014": "v"}
     for r in coarse:
         err = max(abs(r["error"]), 1e-4)
         ax.errorbar(r["cost"], 100 * err, yerr=100 * r["error_se"], fmt=markers.get(r["drag"], "o"),
