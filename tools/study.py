@@ -81,9 +81,25 @@ def main():
             sys.exit(f"study: {r}: no readable summary.h5 ({e})")
     keys = ["phi", "cell_over_dp", "alpha", "drag", "slip", "slip_se", "ref_slip", "ref_se", "error", "error_se", "cost", "kind", "run"]
     coarse = [r for r in rows if r["kind"] == "coarse"]
-    front = {id(r) for r in pareto(coarse)}
+    # a configuration (grid, alpha, drag law) is judged over every solids fraction: its rms error and mean
+    # cost; the Pareto front is over configurations (the parcel fit's own runs, model-raw, are left out)
+    configs = {}
+    for r in coarse:
+        if r["drag"] != "model-raw":
+            configs.setdefault((r["cell_over_dp"], r["alpha"], r["drag"]), []).append(r)
+    agg = []
+    for (cell, alpha, drag), rs in sorted(configs.items()):
+        agg.append(dict(cell_over_dp=cell, alpha=alpha, drag=drag, n=len(rs),
+                        error=float(np.sqrt(np.mean([r["error"] ** 2 for r in rs]))),
+                        worst=float(max(abs(r["error"]) for r in rs)),
+                        error_se=float(np.sqrt(np.mean([r["error_se"] ** 2 for r in rs]))),
+                        cost=float(np.mean([r["cost"] for r in rs]))))
+    front_cfg = {id(c) for c in pareto(agg)}
+    for c in agg:
+        c["pareto"] = int(id(c) in front_cfg)
     for r in rows:
-        r["pareto"] = int(id(r) in front)
+        key = (r["cell_over_dp"], r["alpha"], r["drag"])
+        r["pareto"] = int(r["kind"] == "coarse" and any(c["pareto"] and (c["cell_over_dp"], c["alpha"], c["drag"]) == key for c in agg))
     # CSV and HDF5, each written to a temporary name and renamed
     tmp = a.output + ".csv.tmp"
     with open(tmp, "w", newline="") as fh:
@@ -109,22 +125,35 @@ def main():
         print(f"{r['phi']:5.2f} {r['cell_over_dp']:8.2f} {r['alpha']:5.0f} {r['drag']:>9} {r['slip']:7.3f} +- {r['slip_se']:5.3f} "
               f"{r['ref_slip']:7.3f} +- {r['ref_se']:5.3f} {100 * r['error']:6.1f} +- {100 * r['error_se']:4.1f} {r['cost']:10.3g}  "
               f"{'*' if r['pareto'] else ''}")
+    print(f"\nconfigurations over {len({r['phi'] for r in coarse})} solids fraction(s): rms and worst error, mean cost")
+    print(f"{'cell/d_p':>8} {'alpha':>5} {'drag':>9} {'rms error %':>12} {'worst %':>8} {'core-s/s':>9}  pareto")
+    for c in sorted(agg, key=lambda c: c["cost"]):
+        print(f"{c['cell_over_dp']:8.2f} {c['alpha']:5.0f} {c['drag']:>9} {100 * c['error']:12.1f} {100 * c['worst']:8.1f} "
+              f"{c['cost']:9.3g}  {'*' if c['pareto'] else ''}")
+    for target in (0.05, 0.15):
+        ok = [c for c in agg if c["worst"] <= target]
+        pick = min(ok, key=lambda c: c["cost"]) if ok else None
+        print(f"cheapest configuration within {100 * target:.0f} % at every solids fraction: " +
+              (f"cell {pick['cell_over_dp']:.3g} d_p, alpha {pick['alpha']:.0f}, {pick['drag']} ({pick['cost']:.3g} core-s/s)"
+               if pick else "none of the coarse runs (use the resolved run)"))
     # picture
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
     fig, ax = plt.subplots(figsize=(7.5, 5))
     markers = {"beetstra": "o", "wen-yu": "s", "model": "^", "model-raw": "x", "radl2014": "v"}
-    for r in coarse:
-        err = max(abs(r["error"]), 1e-4)
-        ax.errorbar(r["cost"], 100 * err, yerr=100 * r["error_se"], fmt=markers.get(r["drag"], "o"),
-                    color="C%d" % (int(round(np.log2(max(r["alpha"], 1)))) % 10), ms=6, alpha=0.8)
+    for r in coarse:  # every run, faint
+        ax.plot(r["cost"], 100 * max(abs(r["error"]), 1e-2), markers.get(r["drag"], "o"),
+                color="C%d" % (int(round(r["alpha"])) % 10), ms=4, alpha=0.3)
+    for c in agg:  # every configuration: rms error over the solids fractions
+        ax.errorbar(c["cost"], 100 * max(c["error"], 1e-2), yerr=100 * c["error_se"], fmt=markers.get(c["drag"], "o"),
+                    color="C%d" % (int(round(c["alpha"])) % 10), ms=8)
     for r in rows:
         if r["kind"] == "resolved":
             ax.axvline(r["cost"], color="gray", lw=0.8, ls=":")
-    f_rows = pareto(coarse)
+    f_rows = pareto(agg)
     if f_rows:
-        ax.plot([r["cost"] for r in f_rows], [100 * max(abs(r["error"]), 1e-4) for r in f_rows], "k--", lw=1, label="Pareto front")
+        ax.plot([r["cost"] for r in f_rows], [100 * max(abs(r["error"]), 1e-2) for r in f_rows], "k--", lw=1, label="Pareto front")
     for d, m in markers.items():
         if any(r["drag"] == d for r in coarse):
             ax.plot([], [], m, color="k", label=f"drag: {d}")
@@ -134,7 +163,7 @@ def main():
     ax.axhline(15, color="orange", lw=0.5)
     ax.set_xlabel("cost (core-seconds per simulated second)")
     ax.set_ylabel("|error of <u_slip,y>| (%)")
-    ax.set_title("accuracy against cost (colour: parcel size α; dotted: resolved runs)", fontsize=9)
+    ax.set_title("rms error over the solids fractions against cost (faint: single runs;\ncolour: parcel size α; dotted: resolved runs)", fontsize=9)
     ax.legend(fontsize=8)
     fig.tight_layout()
     fig.savefig(a.output + ".png", dpi=120)
