@@ -48,6 +48,24 @@ void agree_on_errors(MPI_Comm comm, int status, const std::string& message) {
   throw RunError(text);
 }
 
+/// Runs `body` on every rank and ends the job on all of them with the first failing rank's error
+/// (InputError stays InputError, anything else becomes a RunError).
+template <class Body>
+void on_all_ranks(MPI_Comm comm, Body&& body) {
+  int status = 0;
+  std::string message;
+  try {
+    body();
+  } catch (const InputError& e) {
+    status = 2;
+    message = e.what();
+  } catch (const std::exception& e) {
+    status = 1;
+    message = e.what();
+  }
+  agree_on_errors(comm, status, message);
+}
+
 struct Statistics {
   std::vector<double> tau, n_eff_run;
   std::vector<std::int64_t> block_len, block_of_row;
@@ -356,20 +374,7 @@ std::size_t run_filter(const FilterOptions& o, MPI_Comm comm) {
   MPI_Comm_size(comm, &size);
   const double t_start = now_s();
   FilterPlan plan;
-  {
-    int status = 0;
-    std::string message;
-    try {
-      plan = plan_filter(o);
-    } catch (const InputError& e) {
-      status = 2;
-      message = e.what();
-    } catch (const std::exception& e) {
-      status = 1;
-      message = e.what();
-    }
-    agree_on_errors(comm, status, message);
-  }
+  on_all_ranks(comm, [&] { plan = plan_filter(o); });
   const std::size_t n_widths = plan.widths_m.size() + 1, n_bins = plan.bin_edges.size() - 1;
   const std::size_t rows = plan.snapshot_count();
   const double d = plan.runs.front().physics.diameter_m;
@@ -391,10 +396,8 @@ std::size_t run_filter(const FilterOptions& o, MPI_Comm comm) {
   std::vector<std::string> checksums(rows);
   double read_s = 0, filter_s = 0;
   std::int64_t particle_widths = 0;
-  {
-    int status = 0;
-    std::string message;
-    try {
+  on_all_ranks(comm, [&] {
+    {
       std::size_t done = 0, mine = 0;
       for (std::size_t k = static_cast<std::size_t>(rank); k < rows; k += static_cast<std::size_t>(size)) ++mine;
       double last_print = now_s();
@@ -433,15 +436,8 @@ std::size_t run_filter(const FilterOptions& o, MPI_Comm comm) {
           last_print = t;
         }
       }
-    } catch (const InputError& e) {
-      status = 2;
-      message = e.what();
-    } catch (const std::exception& e) {
-      status = 1;
-      message = e.what();
     }
-    agree_on_errors(comm, status, message);
-  }
+  });
   // Every snapshot's slot is filled by exactly one rank and zero elsewhere: the sum is exact.
   MPI_Allreduce(MPI_IN_PLACE, sums.data(), static_cast<int>(sums.size()), MPI_DOUBLE, MPI_SUM, comm);
   MPI_Allreduce(MPI_IN_PLACE, out_of_range.data(), static_cast<int>(n_widths), MPI_INT64_T, MPI_SUM, comm);
@@ -482,9 +478,7 @@ std::size_t run_filter(const FilterOptions& o, MPI_Comm comm) {
   double times[2] = {read_s, filter_s};
   MPI_Allreduce(MPI_IN_PLACE, times, 2, MPI_DOUBLE, MPI_SUM, comm);
   MPI_Allreduce(MPI_IN_PLACE, &particle_widths, 1, MPI_INT64_T, MPI_SUM, comm);
-  {
-    int status = 0;
-    std::string message;
+  on_all_ranks(comm, [&] {
     if (rank == 0) {
       try {
         const double t0 = now_s();
@@ -510,16 +504,13 @@ std::size_t run_filter(const FilterOptions& o, MPI_Comm comm) {
           }
           std::cerr << "  whole box: mean slip " << (c > 0 ? s / c / p.u_t_m_s : 0.0) << " u_t\n";
         }
-      } catch (const InputError& e) {
-        status = 2;
-        message = e.what();
+      } catch (const InputError&) {
+        throw;
       } catch (const std::exception& e) {
-        status = 1;
-        message = std::string("writing ") + o.output_path + ": " + e.what();
+        throw RunError(std::string("writing ") + o.output_path + ": " + e.what());
       }
     }
-    agree_on_errors(comm, status, message);
-  }
+  });
   return rows;
 }
 
