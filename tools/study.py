@@ -120,11 +120,11 @@ def main():
         f["pareto"] = np.array([r["pareto"] for r in rows], dtype=np.int64)
     os.replace(tmp, a.output + ".h5")
     # table
-    print(f"{'phi':>5} {'cell/d_p':>8} {'alpha':>5} {'drag':>9} {'slip/u_t':>15} {'ref':>15} {'error %':>14} {'core-s/s':>10}  pareto")
+    print(f"{'phi':>5} {'cell/d_p':>8} {'alpha':>5} {'drag':>9} {'slip/u_t':>15} {'ref':>15} {'error %':>14} {'core-s/s':>10}  pareto  run")
     for r in sorted(rows, key=lambda r: (r["phi"], r["kind"] != "resolved", r["drag"], r["cell_over_dp"], r["alpha"])):
         print(f"{r['phi']:5.2f} {r['cell_over_dp']:8.2f} {r['alpha']:5.0f} {r['drag']:>9} {r['slip']:7.3f} +- {r['slip_se']:5.3f} "
               f"{r['ref_slip']:7.3f} +- {r['ref_se']:5.3f} {100 * r['error']:6.1f} +- {100 * r['error_se']:4.1f} {r['cost']:10.3g}  "
-              f"{'*' if r['pareto'] else ''}")
+              f"{'*' if r['pareto'] else ' '}       {os.path.basename(os.path.normpath(r['run']))}")
     print(f"\nconfigurations over {len({r['phi'] for r in coarse})} solids fraction(s): rms and worst error, mean cost")
     print(f"{'cell/d_p':>8} {'alpha':>5} {'drag':>9} {'rms error %':>12} {'worst %':>8} {'core-s/s':>9}  pareto")
     for c in sorted(agg, key=lambda c: c["cost"]):
