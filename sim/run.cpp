@@ -106,6 +106,26 @@ dem::DemSettings dem_settings_from_scene(const Scene& scene) {
   return s;
 }
 
+PeriodicDriving periodic_driving(const Scene& scene) {
+  const FluidConfig& f = *scene.fluid;
+  const double volume = scene.domain.size_m[0] * scene.domain.size_m[1] * scene.domain.size_m[2];
+  const double phi = static_cast<double>(scene.derived.particle_count) * std::pow(scene.particles.parcel_size, 3) *
+                     scene.derived.particle_volume_m3 / volume;
+  const double rho_p = scene.particles.density_kg_m3, rho_f = f.density_kg_m3;
+  const double rho_mix = phi * rho_p + (1.0 - phi) * rho_f;
+  // density whose weight the mean pressure gradient carries (see run.hpp)
+  double carried = rho_f;
+  if (f.coupling == Coupling::TwoWay) carried = f.pressure_gradient_force ? rho_mix : rho_mix / (1.0 - phi);
+  const Vec3& g = scene.domain.gravity_m_s2;
+  PeriodicDriving d;
+  for (int c = 0; c < 3; ++c) {
+    d.pressure_gradient_mean_Pa_m[c] = carried * g[c];
+    d.fluid_body_force_N_m3[c] = (rho_f - carried) * g[c];
+    d.particle_body_accel_m_s2[c] = f.pressure_gradient_force ? g[c] * (1.0 - carried / rho_p) : g[c];
+  }
+  return d;
+}
+
 namespace {
 
 /// The fluid grid of a scene that solves the fluid (nullptr otherwise). Throws InputError when the
@@ -129,13 +149,6 @@ dem::DemSettings make_dem_settings(const Scene& scene, const fluid::FluidGrid* g
   return s;
 }
 
-/// Mixture density of the periodic sedimentation driving (models.md): <phi> rho_p + <eps> rho_f.
-double mixture_density(const Scene& scene) {
-  const double volume = scene.domain.size_m[0] * scene.domain.size_m[1] * scene.domain.size_m[2];
-  const double phi = static_cast<double>(scene.derived.particle_count) * std::pow(scene.particles.parcel_size, 3) *
-                     scene.derived.particle_volume_m3 / volume;
-  return phi * scene.particles.density_kg_m3 + (1.0 - phi) * scene.fluid->density_kg_m3;
-}
 
 struct Frame {
   std::int64_t step;
@@ -186,12 +199,11 @@ class RunDriver {
  private:
   void setup_fluid() {
     const FluidConfig& f = *scene_.fluid;
-    const double rho_mix = mixture_density(scene_);
-    const Vec3& g = scene_.domain.gravity_m_s2;
+    const PeriodicDriving driving = periodic_driving(scene_);
     fluid::FluidSettings fs;
     fs.density_kg_m3 = f.density_kg_m3;
     fs.viscosity_Pa_s = f.viscosity_Pa_s;
-    for (int d = 0; d < 3; ++d) fs.body_force_per_fluid_volume_N_m3[d] = (f.density_kg_m3 - rho_mix) * g[d];
+    fs.body_force_per_fluid_volume_N_m3 = driving.fluid_body_force_N_m3;
     t_coupling_ = run_timers_.add("coupling");
     fluid_ = std::make_unique<fluid::FluidSolver>(*grid_, fs, &run_timers_);
     coupling::CouplerSettings cs;
@@ -202,9 +214,9 @@ class RunDriver {
     cs.particle_mass_kg = scene_.derived.parcel_mass_kg;
     cs.two_way = f.coupling == Coupling::TwoWay;
     cs.pressure_gradient_force = f.pressure_gradient_force;
-    for (int d = 0; d < 3; ++d) cs.particle_body_accel[d] = g[d] * (1.0 - rho_mix / scene_.particles.density_kg_m3);
+    cs.particle_body_accel = driving.particle_body_accel_m_s2;
     coupler_ = std::make_unique<coupling::Coupler>(cs, *grid_);
-    pressure_gradient_mean_ = {rho_mix * g[0], rho_mix * g[1], rho_mix * g[2]};
+    pressure_gradient_mean_ = driving.pressure_gradient_mean_Pa_m;
     // Particle drag is explicit over a fluid step (momentum exchange exact, coupler.hpp): keep
     // dt_fluid beta_max / rho_p <= 0.5, beta_max at the densest admissible state (eps at its floor).
     const double beta_max = beta_p(f.drag, cs.drag_params, 1.0 - cs.void_fraction_floor, 0.0);
