@@ -825,6 +825,36 @@ Scene build_scene(const SceneReader& in) {
                       " m^3; raise it or enlarge the box");
   if (count > 9e15) in.fail_value("particles", "solids_fraction", "gives more particles than can be counted");
   x.particle_count = static_cast<std::int64_t>(count);
+
+  // ---- nonsense that validates key by key but cannot be run (issue 10, item 5) ----
+  // The drag laws' range (core/drag.hpp): Beetstra was fitted to lattice-Boltzmann data for Re < 1000, Wen-Yu's
+  // C_d switches to Newton's 0.44 above 1000, Stokes drag holds for Re << 1. A terminal Reynolds number far
+  // outside is almost always a unit mistake (a diameter in um or mm given as m).
+  if (s.fluid && x.re_p > 1000.0)
+    in.fail_value("particles", "diameter",
+                  "gives a terminal Reynolds number Re_p = " + SceneReader::format_short(x.re_p) +
+                      " (u_t = " + SceneReader::format_short(x.u_t_m_s) +
+                      " m/s), outside the range the drag laws were fitted for (Re_p <= 1000); the diameter is "
+                      "in metres (75 um is 75e-6)");
+  // A run that would do no step: the run does round(end_time / dt_DEM) steps.
+  if (std::llround(r.end_time_s / x.dt_dem_s) < 1)
+    in.fail_value("run", in.has("run", "end_time") ? "end_time" : "end_time_tref",
+                  "is shorter than one DEM step (dt_DEM = " + SceneReader::format_short(x.dt_dem_s) +
+                      " s): the run would do no step; lengthen it or shorten the step (contact.t_star)");
+  // A fluid step is a whole number of DEM steps: a DEM step above the fluid's Courant step at u_t
+  // would advance the fluid by more than the Courant number allows from the first step on.
+  if (s.solves_fluid() && x.dt_dem_s > x.dt_fluid_s)
+    in.fail(std::string("the DEM step dt_DEM = ") + SceneReader::format_short(x.dt_dem_s) +
+            " s (contact.t_star x t_c) is longer than the fluid step " + SceneReader::format_short(x.dt_fluid_s) +
+            " s (fluid.courant x cell / u_t): a fluid step is a whole number of DEM steps; lower contact.t_star, "
+            "stiffen the contacts (contact.gamma_star / contact.stiffness) or use larger cells");
+  if (s.fluid && s.fluid->drag == DragLaw::Stokes && x.re_p > 10.0)
+    s.warnings.push_back("fluid.drag = \"stokes\" at Re_p = " + SceneReader::format_short(x.re_p) +
+                         ": Stokes drag holds for Re_p << 1 and underestimates the drag here by 1 + 0.15 Re^0.687 = " +
+                         SceneReader::format_short(1.0 + 0.15 * std::pow(x.re_p, 0.687)));
+  if (s.fluid && s.fluid->density_kg_m3 >= p.density_kg_m3)
+    s.warnings.push_back("fluid.density >= particles.density: the particles do not settle (the scenes of this "
+                         "project are heavy particles in a gas)");
   // Measured peak per particle (bench/README.md): ~300 B of DEM arrays (double-buffered state, neighbour
   // list with history, ghosts) plus placement and I/O buffers: 450 B is the peak seen at 200k-600k particles.
   x.memory_estimate_bytes = count * 450.0;
@@ -1005,6 +1035,7 @@ std::string describe_scene(const Scene& s) {
     row("cells", "none (no grid)");
   }
   row("memory estimate", bytes(x.memory_estimate_bytes));
+  for (const std::string& w : s.warnings) out << "warning: " << w << "\n";
   return out.str();
 }
 

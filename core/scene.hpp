@@ -96,6 +96,7 @@ struct Scene {
   std::optional<FluidConfig> fluid;   // absent: dry granular run, no grid
   RunConfig run;
   DerivedScales derived;
+  std::vector<std::string> warnings;  // odd but possibly meant: printed with the scene (describe_scene)
 
   bool has_contacts() const { return contact.model != ContactModel::None; }
   bool has_friction() const { return has_contacts() && contact.friction > 0.0; }
