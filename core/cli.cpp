@@ -43,8 +43,9 @@ RunOptions parse_run_command_line(int argc, char** argv, const std::string& tool
                                   const std::function<void(CLI::App&)>& add_options) {
   RunOptions options;
   CLI::App app{description, tool_name};
-  app.add_option("scene", options.scene_path, "Scene file (TOML), e.g. data/scenes/dry_settling.toml")
-      ->required()
+  app.add_option("scene", options.scene_path,
+                 "Scene file (TOML), e.g. data/scenes/dry_settling.toml; with --restart -o DIR it may be left out "
+                 "(DIR/scene.toml is used)")
       ->type_name("SCENE.toml");
   app.add_option("--set", options.overrides,
                  "Override one scene key, SECTION.KEY=VALUE with the value in TOML "
@@ -58,6 +59,13 @@ RunOptions parse_run_command_line(int argc, char** argv, const std::string& tool
   app.add_flag("--quiet", options.quiet, "No progress output");
   if (add_options) add_options(app);
   parse_command_line(app, argc, argv, tool_name);
+  if (options.scene_path.empty()) {
+    if (!options.restart || options.output_dir.empty())
+      throw CommandLineExit(kExitBadInput, "",
+                            "scene is required (only --restart -o DIR may leave it out: the run's own "
+                            "DIR/scene.toml is used)\nRun with --help for more information.\n");
+    options.scene_path = (std::filesystem::path(options.output_dir) / "scene.toml").string();
+  }
   return options;
 }
 

@@ -937,6 +937,55 @@ std::string bytes(double b) {
 
 }  // namespace
 
+bool restart_may_change(const std::string& key) {
+  static const std::set<std::string> allowed = {
+      "run.end_time",        "run.end_time_tref",        "run.dump_interval", "run.dump_interval_tref",
+      "run.series_interval", "run.series_interval_tref", "run.checkpoint_wall_s"};
+  return allowed.count(key) != 0;
+}
+
+namespace {
+bool same_value(const toml::node& a, const toml::node& b) {
+  if ((a.is_integer() || a.is_floating_point()) && (b.is_integer() || b.is_floating_point()))
+    return a.value<double>() == b.value<double>();
+  const toml::array* x = a.as_array();
+  const toml::array* y = b.as_array();
+  if (x && y) {
+    if (x->size() != y->size()) return false;
+    for (std::size_t i = 0; i < x->size(); ++i)
+      if (!same_value(*x->get(i), *y->get(i))) return false;
+    return true;
+  }
+  return format_node(a) == format_node(b);
+}
+}  // namespace
+
+std::vector<std::string> restart_differences(const std::string& checkpoint_toml, const std::string& given_toml) {
+  toml::table then, now;
+  try {
+    then = toml::parse(checkpoint_toml, std::string_view("checkpoint scene"));
+    now = toml::parse(given_toml, std::string_view("scene"));
+  } catch (const toml::parse_error& e) {
+    throw InputError(std::string("the checkpoint's stored scene cannot be read: ") + std::string(e.description()));
+  }
+  std::vector<std::string> out;
+  for (const auto& section : schema()) {
+    const toml::table* a = then[section.name].as_table();
+    const toml::table* b = now[section.name].as_table();
+    for (const auto& key : section.keys) {
+      const std::string name = std::string(section.name) + "." + key.name;
+      if (restart_may_change(name)) continue;
+      const toml::node* x = a ? a->get(key.name) : nullptr;
+      const toml::node* y = b ? b->get(key.name) : nullptr;
+      if (!x && !y) continue;
+      if (x && y && same_value(*x, *y)) continue;
+      out.push_back(name + " = " + (x ? format_node(*x) : std::string("(not given)")) + " in the checkpoint, " +
+                    (y ? format_node(*y) : std::string("(not given)")) + " now");
+    }
+  }
+  return out;
+}
+
 std::string describe_scene(const Scene& s) {
   std::ostringstream out;
   const auto row = [&](const std::string& label, const std::string& value) {

@@ -111,6 +111,15 @@ Scene load_scene(const std::string& path, const std::vector<std::string>& overri
 Scene load_scene_from_string(const std::string& toml_text, const std::string& origin,
                              const std::vector<std::string>& overrides = {});
 
+/// The keys a restart may change (the run's end, its snapshot, series and checkpoint intervals): every
+/// other key is physics, and a restart that changes it would continue a different simulation.
+bool restart_may_change(const std::string& section_dot_key);
+
+/// Every key other than those a restart may change whose value differs between two scenes given as
+/// effective TOML text (Scene::effective_toml), one line each: "section.key = OLD in the checkpoint, NEW
+/// now" (a key given in only one of them counts as a difference). Numbers compare by value.
+std::vector<std::string> restart_differences(const std::string& checkpoint_toml, const std::string& given_toml);
+
 /// Human-readable table of the effects that are on and the derived numbers (printed at start).
 std::string describe_scene(const Scene& scene);
 

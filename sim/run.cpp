@@ -181,14 +181,26 @@ class RunDriver {
 
   void run() {
     check_directory();
-    // Placement can still refuse the scene (InputError): do it before anything is written.
+    // Placement and the checkpoint can still refuse the scene (InputError): both before anything is written.
     if (!settings_.restart) initial_state();
+    else load_checkpoint();
+    if (settings_.restart && restarted_from_ == end_step_) {
+      int done = rank_ == 0 && fs::exists(dir_ / "DONE") ? 1 : 0;
+      MPI_Bcast(&done, 1, MPI_INT, 0, comm_);
+      if (done) {  // nothing to run: leave the completed run as it is
+        if (rank_ == 0)
+          std::cout << settings_.tool << ": " << dir_.string() << " is already complete at step " << end_step_
+                    << " (t = " << static_cast<double>(end_step_) * dt_
+                    << " s); nothing to do (raise run.end_time to continue it)\n"
+                    << std::flush;
+        return;
+      }
+    }
     if (rank_ == 0) {
       fs::create_directories(dir_ / "snapshots");
       write_text_atomically(dir_ / "scene.toml", scene_.effective_toml);
     }
     MPI_Barrier(comm_);
-    if (settings_.restart) load_checkpoint();
     print_banner();
     std::signal(SIGINT, on_signal);
     std::signal(SIGTERM, on_signal);
@@ -458,6 +470,9 @@ class RunDriver {
       frame_times.push_back(f.time);
       frame_counts.push_back(f.count);
     }
+    // The series first: a kill between the two leaves a series that reaches past the older checkpoint
+    // (a restart cuts it back), never one that stops short of the newer checkpoint (a gap of rows).
+    write_series();
     h5::write_atomically((dir_ / "checkpoint.h5").string(), comm_, [&](h5::File& file) {
       schema::write_common(file, "checkpoint", scene_);
       file.set_attr("/", "step", dem_.step_index());
@@ -486,7 +501,6 @@ class RunDriver {
       file.write_rows("/contacts/spring", store.xi.data(), m, 3);
       if (fluid_) write_fluid_state(file);
     });
-    write_series();
     last_checkpoint_wall_ = wall_seconds();
   }
 
@@ -531,6 +545,10 @@ class RunDriver {
     const std::string path = (dir_ / "checkpoint.h5").string();
     h5::File file = h5::File::open_read(path, comm_);
     const std::int64_t step = file.attr_int("/", "step");
+    if (step > end_step_)
+      throw InputError(scene_.source_path + ": run.end_time = " + std::to_string(scene_.run.end_time_s) +
+                       " s is before the checkpoint's time " + std::to_string(static_cast<double>(step) * dt_) +
+                       " s (" + path + "): a restart can only continue a run; give an end time at or after it");
     const std::int64_t ranks_then = file.attr_int("/", "ranks");
     const std::vector<std::int64_t> counts = file.attr_ints("/", "rank_particle_counts");
     const std::vector<std::int64_t> ccounts = file.attr_ints("/", "rank_contact_counts");
@@ -856,7 +874,43 @@ class RunDriver {
 
 }  // namespace
 
+Scene restart_scene(const Scene& scene, const std::string& output_dir, MPI_Comm comm) {
+  const fs::path path = fs::path(output_dir) / "checkpoint.h5";
+  int rank = 0, exists = 0;
+  MPI_Comm_rank(comm, &rank);
+  if (rank == 0) exists = fs::exists(path) ? 1 : 0;
+  MPI_Bcast(&exists, 1, MPI_INT, 0, comm);
+  if (!exists)
+    throw InputError(path.string() + ": no checkpoint to restart from (--restart needs a run directory written by " +
+                     "an earlier run of this scene)");
+  std::string stored, name;
+  {
+    h5::File file = h5::File::open_read(path.string(), comm);
+    stored = file.attr_string("/", "scene");
+    name = file.attr_string("/params", "scene_name");
+  }
+  const std::vector<std::string> diff = restart_differences(stored, scene.effective_toml);
+  if (!diff.empty()) {
+    std::string message = scene.source_path + ": the scene differs from the one the run in " + output_dir +
+                          " was started with, in " + std::to_string(diff.size()) +
+                          " key(s); a restart continues the same simulation, so only run.end_time, "
+                          "run.dump_interval, run.series_interval and run.checkpoint_wall_s (or their _tref forms) "
+                          "may change (start a new run in another directory for anything else):";
+    for (const std::string& d : diff) message += "\n  " + d;
+    throw InputError(message);
+  }
+  Scene out = scene;
+  out.name = name;  // restarting from the run's own scene.toml keeps the scene's name
+  return out;
+}
+
 void run_scene(const Scene& scene, const RunSettings& settings, MPI_Comm comm) {
+  if (settings.restart) {
+    const Scene restarted = restart_scene(scene, settings.output_dir, comm);
+    RunDriver driver(restarted, settings, comm);
+    driver.run();
+    return;
+  }
   RunDriver driver(scene, settings, comm);
   driver.run();
 }

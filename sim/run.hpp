@@ -50,6 +50,13 @@ struct RunSettings {
 /// anything for bad input (an existing run directory without --restart, a missing checkpoint),
 /// and RunError for a failed run, after writing a diagnostic snapshot and keeping the last
 /// checkpoint. SIGINT/SIGTERM write a checkpoint and end the run with RunError ("interrupted").
+/// With settings.restart: refuses (InputError, nothing written) a scene whose physics differs from the
+/// checkpoint's (restart_differences), an end time before the checkpoint, and does nothing for a run
+/// that is already complete (DONE written and the checkpoint at the end).
 void run_scene(const Scene& scene, const RunSettings& settings, MPI_Comm comm);
+
+/// The scene a restart of the run in output_dir continues: `scene` with the checkpoint's scene name, after
+/// checking that only the keys restart_may_change differ. Throws InputError otherwise. Collective.
+Scene restart_scene(const Scene& scene, const std::string& output_dir, MPI_Comm comm);
 
 }  // namespace cgd
