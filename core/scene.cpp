@@ -126,6 +126,13 @@ const std::vector<SectionSpec>& schema() {
         {"series_interval_tref", Kind::Number, "time-series interval in units of t_ref = u_t/g"},
         {"checkpoint_wall_s", Kind::Number, "wall-clock seconds between checkpoints"},
         {"dt", Kind::Number, "s, explicit DEM time step"}}},
+      {"numerics",
+       {{"void_fraction_floor", Kind::Number, "smallest void fraction the fluid sees (conservative floor)"},
+        {"overlap_limit", Kind::Number, "largest relative overlap (of the diameter) before a run error"},
+        {"overlap_warning_fraction", Kind::Number, "fraction of overlap_limit at which the run warns once"},
+        {"viscous_safety", Kind::Number, "fluid step over AB2's explicit-viscosity limit"},
+        {"drag_safety", Kind::Number, "largest fluid step x beta_max / rho_p (explicit particle drag)"},
+        {"sort_interval_steps", Kind::Integer, "DEM steps between reorderings of the particles by cell"}}},
   };
   return sections;
 }
@@ -669,8 +676,11 @@ Scene build_scene(const SceneReader& in) {
                     "must be < particles.density = " + SceneReader::format_short(p.density_kg_m3) +
                         " kg/m^3 (the particles must sink)");
     if (auto v = in.number("fluid", "viscosity")) f.viscosity_Pa_s = in.positive("fluid", "viscosity", *v);
+    // AB2 with central advection (sim/fluid/solver.hpp, von Neumann): |G| <= 1 for Co <= 0.5 only
     if (auto v = in.number("fluid", "courant"))
-      f.courant = in.in_range("fluid", "courant", *v, 0.0, 1.0, true);
+      f.courant = in.in_range("fluid", "courant", *v, 0.0, 0.5, true,
+                              "; above 0.5 the fluid scheme -- Adams-Bashforth 2 with central advection -- is "
+                              "unstable: its amplification factor exceeds 1 for Co = sum_d |u_d| dt/h_d > 0.5");
     f.coupling = in.choice<Coupling>(
         "fluid", "coupling",
         {{"two-way", Coupling::TwoWay}, {"one-way", Coupling::OneWay}, {"quiescent", Coupling::Quiescent}},
@@ -730,6 +740,25 @@ Scene build_scene(const SceneReader& in) {
   if (auto v = in.number("run", "checkpoint_wall_s"))
     r.checkpoint_wall_s = in.positive("run", "checkpoint_wall_s", *v);
   if (auto v = in.number("run", "dt")) r.dt_s = in.positive("run", "dt", *v);
+
+  // [numerics]
+  NumericsConfig& nm = s.numerics;
+  if (auto v = in.number("numerics", "void_fraction_floor"))
+    nm.void_fraction_floor = in.in_range("numerics", "void_fraction_floor", *v, 0.0, 1.0, false);
+  if (auto v = in.number("numerics", "overlap_limit"))
+    nm.overlap_limit = in.in_range("numerics", "overlap_limit", *v, 0.0, 1.0, true);
+  if (auto v = in.number("numerics", "overlap_warning_fraction"))
+    nm.overlap_warning_fraction = in.in_range("numerics", "overlap_warning_fraction", *v, 0.0, 1.0, true);
+  if (auto v = in.number("numerics", "viscous_safety"))
+    nm.viscous_safety = in.in_range("numerics", "viscous_safety", *v, 0.0, 0.99, true,
+                                    "; measured stable up to 0.99 for the roughest eps fields, solver.hpp");
+  if (auto v = in.number("numerics", "drag_safety"))
+    nm.drag_safety = in.in_range("numerics", "drag_safety", *v, 0.0, 1.0, true,
+                                 "; explicit particle drag over a fluid step overshoots above 1");
+  if (auto v = in.integer("numerics", "sort_interval_steps")) {
+    if (*v < 1) in.fail_value("numerics", "sort_interval_steps", "must be an integer >= 1");
+    nm.sort_interval_steps = *v;
+  }
 
   // ---- derived numbers (models.md) ----
   DerivedScales& x = s.derived;
@@ -852,9 +881,6 @@ Scene build_scene(const SceneReader& in) {
     s.warnings.push_back("fluid.drag = \"stokes\" at Re_p = " + SceneReader::format_short(x.re_p) +
                          ": Stokes drag holds for Re_p << 1 and underestimates the drag here by 1 + 0.15 Re^0.687 = " +
                          SceneReader::format_short(1.0 + 0.15 * std::pow(x.re_p, 0.687)));
-  if (s.fluid && s.fluid->density_kg_m3 >= p.density_kg_m3)
-    s.warnings.push_back("fluid.density >= particles.density: the particles do not settle (the scenes of this "
-                         "project are heavy particles in a gas)");
   // Measured peak per particle (bench/README.md): ~300 B of DEM arrays (double-buffered state, neighbour
   // list with history, ghosts) plus placement and I/O buffers: 450 B is the peak seen at 200k-600k particles.
   x.memory_estimate_bytes = count * 450.0;
@@ -1084,6 +1110,13 @@ std::string describe_scene(const Scene& s) {
     row("cells", "none (no grid)");
   }
   row("memory estimate", bytes(x.memory_estimate_bytes));
+  const NumericsConfig& nm = s.numerics;
+  row("numerics", "overlap limit " + num(nm.overlap_limit) + " d (warning at " + num(nm.overlap_warning_fraction) +
+                      " of it), sort every " + std::to_string(nm.sort_interval_steps) + " steps" +
+                      (s.solves_fluid() ? ", void-fraction floor " + num(nm.void_fraction_floor) +
+                                              ", viscous safety " + num(nm.viscous_safety) + ", drag safety " +
+                                              num(nm.drag_safety)
+                                        : std::string()));
   for (const std::string& w : s.warnings) out << "warning: " << w << "\n";
   return out.str();
 }

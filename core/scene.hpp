@@ -61,6 +61,17 @@ struct RunConfig {
   std::optional<double> dt_s;         // explicit time step (needed when contact.model = "none" and no fluid)
 };
 
+/// Numerical constants that change results (issue 10, item 6); the defaults are the values the engine
+/// was verified with. Scene section [numerics]; every one is written to the files' /params.
+struct NumericsConfig {
+  double void_fraction_floor = 0.3;        // eps_min of the coupling's conservative floor (coupler.hpp)
+  double overlap_limit = 0.25;             // largest relative overlap (of the diameter) before a run error
+  double overlap_warning_fraction = 0.5;   // warn once when the largest overlap passes this x overlap_limit
+  double viscous_safety = 0.8;             // fluid step <= this x AB2's explicit-viscosity limit (solver.hpp)
+  double drag_safety = 0.5;                // fluid step x beta_max / rho_p <= this (explicit particle drag)
+  std::int64_t sort_interval_steps = 1000; // DEM steps between reorderings of the particles by cell
+};
+
 /// Numbers derived from the scene, printed at start and stored in every output file (/params).
 struct DerivedScales {
   double particle_volume_m3 = 0;      // primary particle volume V_p
@@ -95,6 +106,7 @@ struct Scene {
   ContactConfig contact;
   std::optional<FluidConfig> fluid;   // absent: dry granular run, no grid
   RunConfig run;
+  NumericsConfig numerics;
   DerivedScales derived;
   std::vector<std::string> warnings;  // odd but possibly meant: printed with the scene (describe_scene)
 

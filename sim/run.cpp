@@ -74,6 +74,8 @@ dem::DemSettings dem_settings_from_scene(const Scene& scene) {
   s.contact.friction = scene.contact.friction;
   s.contact.dt = d.dt_dem_s;
   s.skin_m = scene.contact.skin_over_dp * d.parcel_diameter_m;
+  s.overlap_limit = scene.numerics.overlap_limit;
+  s.sort_interval_steps = scene.numerics.sort_interval_steps;
   const Vec3& g = scene.domain.gravity_m_s2;
   s.drive.accel = {g[0], g[1], g[2]};
   if (scene.fluid && scene.solves_fluid()) {
@@ -216,6 +218,7 @@ class RunDriver {
     fs.density_kg_m3 = f.density_kg_m3;
     fs.viscosity_Pa_s = f.viscosity_Pa_s;
     fs.body_force_per_fluid_volume_N_m3 = driving.fluid_body_force_N_m3;
+    fs.viscous_safety = scene_.numerics.viscous_safety;
     t_coupling_ = run_timers_.add("coupling");
     fluid_ = std::make_unique<fluid::FluidSolver>(*grid_, fs, &run_timers_);
     coupling::CouplerSettings cs;
@@ -226,13 +229,15 @@ class RunDriver {
     cs.particle_mass_kg = scene_.derived.parcel_mass_kg;
     cs.two_way = f.coupling == Coupling::TwoWay;
     cs.pressure_gradient_force = f.pressure_gradient_force;
+    cs.void_fraction_floor = scene_.numerics.void_fraction_floor;
     cs.particle_body_accel = driving.particle_body_accel_m_s2;
     coupler_ = std::make_unique<coupling::Coupler>(cs, *grid_);
     pressure_gradient_mean_ = driving.pressure_gradient_mean_Pa_m;
     // Particle drag is explicit over a fluid step (momentum exchange exact, coupler.hpp): keep
-    // dt_fluid beta_max / rho_p <= 0.5, beta_max at the densest admissible state (eps at its floor).
+    // dt_fluid beta_max / rho_p <= numerics.drag_safety (0.5), beta_max at the densest admissible state
+    // (eps at its floor).
     const double beta_max = beta_p(f.drag, cs.drag_params, 1.0 - cs.void_fraction_floor, 0.0);
-    dt_fluid_cap_ = 0.5 * scene_.particles.density_kg_m3 / beta_max;
+    dt_fluid_cap_ = scene_.numerics.drag_safety * scene_.particles.density_kg_m3 / beta_max;
     // A fluid step is a whole number of DEM steps: a DEM step longer than the fluid's stability
     // limits (explicit viscosity, explicit particle drag) cannot be run; refuse it before writing.
     const double limit = std::min(fluid_->viscous_dt_limit(), dt_fluid_cap_);
@@ -634,6 +639,7 @@ class RunDriver {
     if (fs::exists(series_path)) {
       series_ = schema::Series::read(series_path.string(), comm_);
       series_.truncate_after((static_cast<double>(step) - 0.5) * dt_);
+      overlap_warned_ = !series_.warnings().empty();  // warned once per run, restarts included
     } else {
       declare_series();
     }
@@ -684,6 +690,7 @@ class RunDriver {
       snapshot_if_due(step, final_step);
       if (final_step) break;
       or_diagnose([&] { dem_.commit(); });
+      warn_if_overlap_high();
       progress(dem_.step_index(), false);
     }
     progress(end_step_, true);
@@ -728,7 +735,41 @@ class RunDriver {
                      std::to_string(static_cast<double>(step) * dt_) + " s); checkpoint written, continue with " +
                      "--restart");
     }
-    if (flags[1] && step != restarted_from_) write_checkpoint();
+    if ((flags[1] || checkpoint_requested_) && step != restarted_from_) write_checkpoint();
+    checkpoint_requested_ = false;
+  }
+
+  /// Once per run, when the largest overlap (global, DemSystem::commit) passes numerics.
+  /// overlap_warning_fraction of numerics.overlap_limit: say so on stderr and in the series, with the
+  /// contact stiffness that would keep it below, and checkpoint at the next chance (a state before the
+  /// likely failure). The peak overlap of an impact at speed v is v sqrt(m_eff/k_n), so it scales as
+  /// k_n^(-1/2), i.e. linearly with gamma* (models.md: k_n ~ gamma*^-2).
+  void warn_if_overlap_high() {
+    if (overlap_warned_) return;
+    const NumericsConfig& nm = scene_.numerics;
+    const double overlap = dem_.last_max_overlap_rel();
+    const double threshold = nm.overlap_warning_fraction * nm.overlap_limit;
+    if (!(overlap > threshold)) return;
+    overlap_warned_ = true;
+    checkpoint_requested_ = true;
+    const std::int64_t step = dem_.step_index();
+    std::ostringstream o;
+    o.precision(3);
+    o << "warning at step " << step << " (t = " << static_cast<double>(step) * dt_ << " s): the largest overlap reached "
+      << 100.0 * overlap << " % of the diameter, " << 100.0 * overlap / nm.overlap_limit << " % of the limit "
+      << 100.0 * nm.overlap_limit << " % at which the run stops (numerics.overlap_limit). Overlaps scale as "
+      << "k_n^(-1/2), i.e. with gamma*: ";
+    // aim at 0.8 of the threshold: the step that crossed it need not be the impact's deepest
+    const double scale = 0.8 * threshold / overlap;
+    if (scene_.contact.gamma_star)
+      o << "contact.gamma_star = " << *scene_.contact.gamma_star * scale << " (now " << *scene_.contact.gamma_star << ")";
+    else
+      o << "contact.stiffness = " << scene_.derived.k_n_N_m / scene_.particles.parcel_size / (scale * scale)
+        << " N/m (now " << scene_.derived.k_n_N_m / scene_.particles.parcel_size << ")";
+    o << " would keep impacts like these below " << 100.0 * threshold
+      << " % (with a proportionally shorter DEM step); faster impacts later (clusters) need more";
+    series_.add_warning(o.str());
+    if (rank_ == 0) std::cerr << o.str() << "\n" << std::flush;
   }
 
   /// Coupled CFD-DEM: one fluid step, then its DEM sub-steps with the fluid forces held constant
@@ -776,7 +817,10 @@ class RunDriver {
           ScopedPhase t(run_timers_, t_coupling_);
           coupler_->compute_particle_forces(dem_.particles(), fluid_->state());
         }
-        for (std::int64_t k = 0; k < n_sub; ++k) dem_.step();
+        for (std::int64_t k = 0; k < n_sub; ++k) {
+          dem_.step();
+          warn_if_overlap_high();
+        }
       });
       progress(dem_.step_index(), false);
     }
@@ -870,6 +914,7 @@ class RunDriver {
   std::int64_t loop_start_step_ = 0, restarted_from_ = -1;
   std::string placement_method_;
   double placement_gap_ = 0;
+  bool overlap_warned_ = false, checkpoint_requested_ = false;
 };
 
 }  // namespace
