@@ -6,6 +6,7 @@
 #include <cmath>
 #include <csignal>
 #include <cstdio>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <memory>
@@ -54,6 +55,27 @@ void write_text_atomically(const fs::path& path, const std::string& text) {
     if (!out) throw RunError(tmp.string() + ": cannot write");
   }
   fs::rename(tmp, path);
+}
+
+/// A file operation rank 0 does alone, its failure thrown as RunError on every rank (so that no rank is
+/// left waiting in its next collective call). Collective.
+template <class F>
+void on_rank0(MPI_Comm comm, F&& op) {
+  int rank = 0;
+  MPI_Comm_rank(comm, &rank);
+  std::string error;
+  if (rank == 0) {
+    try {
+      op();
+    } catch (const std::exception& e) {
+      error = std::string(e.what()).empty() ? "file operation failed" : e.what();
+    }
+  }
+  int length = static_cast<int>(error.size());
+  MPI_Bcast(&length, 1, MPI_INT, 0, comm);
+  error.resize(static_cast<std::size_t>(length));
+  MPI_Bcast(error.data(), length, MPI_CHAR, 0, comm);
+  if (!error.empty()) throw RunError(error + " (on rank 0)");
 }
 
 }  // namespace
@@ -198,10 +220,13 @@ class RunDriver {
         return;
       }
     }
-    if (rank_ == 0) {
+    on_rank0(comm_, [&] {
       fs::create_directories(dir_ / "snapshots");
       write_text_atomically(dir_ / "scene.toml", scene_.effective_toml);
-    }
+    });
+    // Test hook of the one-rank-error handling (tests/e2e/rank_errors.sh): an error on one rank only.
+    if (const char* r = std::getenv("CGD_TEST_FAIL_ON_RANK"); r && std::atoi(r) == rank_)
+      throw RunError("failure injected on rank " + std::to_string(rank_) + " (CGD_TEST_FAIL_ON_RANK)");
     MPI_Barrier(comm_);
     print_banner();
     std::signal(SIGINT, on_signal);
@@ -423,7 +448,7 @@ class RunDriver {
       std::int64_t n = f.count;
       MPI_Allreduce(MPI_IN_PLACE, &n, 1, MPI_INT64_T, MPI_SUM, comm_);
       frames_.push_back({step, static_cast<double>(step) * dt_, n});
-      if (rank_ == 0) schema::write_xdmf(dir_.string(), xdmf_frames());
+      on_rank0(comm_, [&] { schema::write_xdmf(dir_.string(), xdmf_frames()); });
     }
   }
 
@@ -882,12 +907,11 @@ class RunDriver {
                     total_bytes / std::max<double>(1, static_cast<double>(n)), total_bytes / 1e6);
       o << line;
       std::cout << o.str() << std::flush;
-      std::ostringstream done;
-      done << "completed " << end_step_ << " steps, t = " << static_cast<double>(end_step_) * dt_ << " s, " << n
-           << " particles, " << wall << " s wall\n";
-      write_text_atomically(dir_ / "DONE", done.str());
     }
-    MPI_Barrier(comm_);
+    std::ostringstream done;
+    done << "completed " << end_step_ << " steps, t = " << static_cast<double>(end_step_) * dt_ << " s, " << n
+         << " particles, " << wall << " s wall\n";
+    on_rank0(comm_, [&] { write_text_atomically(dir_ / "DONE", done.str()); });
   }
 
   const Scene& scene_;
