@@ -293,26 +293,22 @@ class RunDriver {
   }
 
   void initial_state() {
-    dem::Placement placement;
+    // Distributed and the same for any rank count (placement.hpp); the first rebuild migrates each
+    // particle to the rank that owns its slab.
+    dem::LocalPlacement placement;
+    const double t0 = wall_seconds();
     try {
-      placement = dem::place_particles(scene_.domain.size_m, dem_.settings().diameter_m, scene_.derived.particle_count,
-                                       scene_.particles.velocity_rms_m_s, scene_.particles.seed);
+      placement = dem::place_particles_distributed(comm_, scene_.domain.size_m, dem_.settings().diameter_m,
+                                                   scene_.derived.particle_count, scene_.particles.velocity_rms_m_s,
+                                                   scene_.particles.seed);
     } catch (const InputError& e) {
       throw InputError(scene_.source_path + ": particles.solids_fraction = " +
                        std::to_string(scene_.particles.solids_fraction) + ": " + e.what());
     }
+    placement_seconds_ = wall_seconds() - t0;
     placement_method_ = placement.method;
     placement_gap_ = placement.min_gap_rel;
-    std::vector<std::int64_t> ids;
-    std::vector<double> x, v;
-    for (std::int64_t i = 0; i < scene_.derived.particle_count; ++i) {
-      const double* p = &placement.position[3 * i];
-      if (dem_.slabs().owner(p[1]) != rank_) continue;
-      ids.push_back(i);
-      x.insert(x.end(), p, p + 3);
-      v.insert(v.end(), &placement.velocity[3 * i], &placement.velocity[3 * i + 3]);
-    }
-    dem_.set_particles(std::move(ids), std::move(x), std::move(v), {});
+    dem_.set_particles(std::move(placement.id), std::move(placement.position), std::move(placement.velocity), {});
     declare_series();
   }
 
@@ -679,7 +675,9 @@ class RunDriver {
     o << describe_scene(scene_);
     o << "MPI ranks: " << ranks_ << " (slabs along y)\n";
     if (restarted_from_ >= 0) o << "restart from checkpoint at step " << restarted_from_ << "\n";
-    else o << "placement: " << placement_method_ << ", smallest gap " << placement_gap_ << " d\n";
+    else
+      o << "placement: " << placement_method_ << ", smallest gap " << placement_gap_ << " d, " << placement_seconds_
+        << " s\n";
     o << "steps: " << end_step_ << " of " << dt_ << " s; snapshots every " << dump_every_ << " steps; series every "
       << series_every_ << " steps\n";
     o << "output: " << dir_.string() << "\n";
@@ -937,7 +935,7 @@ class RunDriver {
   double loop_start_wall_ = 0;
   std::int64_t loop_start_step_ = 0, restarted_from_ = -1;
   std::string placement_method_;
-  double placement_gap_ = 0;
+  double placement_gap_ = 0, placement_seconds_ = 0;
   bool overlap_warned_ = false, checkpoint_requested_ = false;
 };
 
