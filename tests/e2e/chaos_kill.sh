@@ -60,7 +60,9 @@ run=$tmp/chaos
 
 timeout 300 $MPIEXEC --allow-run-as-root --oversubscribe -np 2 "$BIN" "$SCENE" --quiet -o "$tmp/ref" > /dev/null
 
-mtime() { stat -c %Y.%N "$1" 2>/dev/null || echo none; }
+# a file's identity: checkpoint.h5 and series.h5 are written under a temporary name and renamed into
+# place, so each new version has a new inode (mtimes can coincide within the clock's resolution)
+mtime() { stat -c '%i %.9Y' "$1" 2>/dev/null || echo none; }
 tmp_file_present() { compgen -G "$run/*.tmp" > /dev/null || compgen -G "$run/snapshots/*.tmp" > /dev/null; }
 RANDOM=10   # reproducible choice of moments
 kills=0 fresh=0 modes=(0 0 0)
@@ -69,8 +71,10 @@ for cycle in $(seq 1 20); do
   if [ -f "$run/checkpoint.h5" ]; then restart=(--restart)
   else rm -rf "$run"; fresh=$((fresh + 1)); fi
   ckpt0=$(mtime "$run/checkpoint.h5") series0=$(mtime "$run/series.h5")
-  setsid $MPIEXEC --allow-run-as-root --oversubscribe -np 2 "$BIN" "$SCENE" --quiet "${restart[@]}" -o "$run" \
-    > "$tmp/cycle$cycle.log" 2>&1 &
+  # checkpoints every 0.02 s of wall time while being killed: each cycle advances the run by little, so 20
+  # cycles stay well inside the run on a fast machine too (the interval may change on restart)
+  setsid $MPIEXEC --allow-run-as-root --oversubscribe -np 2 "$BIN" "$SCENE" --quiet "${restart[@]}" \
+    --set run.checkpoint_wall_s=0.02 -o "$run" > "$tmp/cycle$cycle.log" 2>&1 &
   pid=$!
   mode=$((RANDOM % 3))
   deadline=$((SECONDS + 60))
@@ -79,7 +83,7 @@ for cycle in $(seq 1 20); do
       0) tmp_file_present && break ;;                                         # during a write
       1) [ -f "$run/checkpoint.h5" ] && [ "$(mtime "$run/checkpoint.h5")" != "$ckpt0" ] && break ;;  # after a checkpoint
       2) if [ -f "$run/series.h5" ] && [ "$(mtime "$run/series.h5")" != "$series0" ]; then
-           sleep "0.$((RANDOM % 300))"; break; fi ;;                         # between writes
+           sleep "0.$(printf %03d $((RANDOM % 100)))"; break; fi ;;          # between writes
     esac
     sleep 0.002
   done
