@@ -200,7 +200,23 @@ class RunDriver {
     t_output_ = run_timers_.add("output");
     t_checkpoint_ = run_timers_.add("checkpoint");
     t_diag_ = run_timers_.add("diagnostics");
-    if (grid_) setup_fluid();
+    if (grid_) {
+      setup_fluid();
+      end_step_ = coupled_end_step(end_step_, dump_every_, scene_.run.end_time_s, scene_.run.dump_interval_s);
+    }
+  }
+
+  /// Coupled runs whose end time is a whole number k of snapshot intervals end on the k-th snapshot step.
+  /// Rounding both times to DEM steps separately can leave the end up to k/2 DEM steps past the last
+  /// snapshot: a final fluid step of a few DEM steps, whose continuity source -- the eps change of the whole
+  /// previous fluid step (deposited at the step's start, coupler.hpp) over its own short dt -- spoils the
+  /// final snapshot's fluid fields (measured: a pressure gradient of 1.9e4 Pa/m and 0.37 m/s at the
+  /// particles after a one-DEM-step final step). The end moves by at most k/2 DEM steps.
+  static std::int64_t coupled_end_step(std::int64_t end_step, std::int64_t dump_every, double end_s, double dump_s) {
+    if (dump_every <= 0 || !(dump_s > 0)) return end_step;
+    const double k = std::round(end_s / dump_s);
+    if (k >= 1 && std::abs(end_s / dump_s - k) < 1e-6 * k) return static_cast<std::int64_t>(k) * dump_every;
+    return end_step;
   }
 
   void run() {

@@ -109,7 +109,7 @@ with h5py.File(run + "/series.h5") as s:
     name = name.decode() if isinstance(name, bytes) else name
     dt = float(s["params"].attrs["dt_dem_s"])
 assert np.all(np.diff(step) > 0), "series steps not increasing"
-assert abs(t[-1] - 0.02) < dt, f"series ends at {t[-1]}, expected 0.02"
+assert abs(t[-1] - 0.02) <= 2.5 * dt, f"series ends at {t[-1]}, expected 0.02"  # 4 x round(0.005/dt) steps
 assert np.allclose(t, step * dt, rtol=0, atol=1e-15), "time != step x dt"
 assert name == "small", f"scene renamed to {name!r}"
 snaps = sorted(glob.glob(run + "/snapshots/snap_*.h5"))
