@@ -2,6 +2,7 @@
 #include "core/cli.hpp"
 
 #include <mpi.h>
+#include <unistd.h>
 
 #include <CLI/CLI.hpp>
 #include <filesystem>
@@ -43,8 +44,9 @@ RunOptions parse_run_command_line(int argc, char** argv, const std::string& tool
                                   const std::function<void(CLI::App&)>& add_options) {
   RunOptions options;
   CLI::App app{description, tool_name};
-  app.add_option("scene", options.scene_path, "Scene file (TOML), e.g. data/scenes/dry_settling.toml")
-      ->required()
+  app.add_option("scene", options.scene_path,
+                 "Scene file (TOML), e.g. data/scenes/dry_settling.toml; with --restart -o DIR it may be left out "
+                 "(DIR/scene.toml is used)")
       ->type_name("SCENE.toml");
   app.add_option("--set", options.overrides,
                  "Override one scene key, SECTION.KEY=VALUE with the value in TOML "
@@ -58,6 +60,13 @@ RunOptions parse_run_command_line(int argc, char** argv, const std::string& tool
   app.add_flag("--quiet", options.quiet, "No progress output");
   if (add_options) add_options(app);
   parse_command_line(app, argc, argv, tool_name);
+  if (options.scene_path.empty()) {
+    if (!options.restart || options.output_dir.empty())
+      throw CommandLineExit(kExitBadInput, "",
+                            "scene is required (only --restart -o DIR may leave it out: the run's own "
+                            "DIR/scene.toml is used)\nRun with --help for more information.\n");
+    options.scene_path = (std::filesystem::path(options.output_dir) / "scene.toml").string();
+  }
   return options;
 }
 
@@ -65,9 +74,56 @@ std::string default_run_directory(const std::string& stage, const std::string& s
   return (std::filesystem::path("out") / stage / std::filesystem::path(scene_path).stem()).string();
 }
 
+namespace {
+
+/// An error thrown on some ranks only would leave the others waiting forever in their next collective
+/// call. So a rank that catches an error first waits (on a communicator of its own, where no other
+/// collective can be pending) for the other ranks to catch theirs: when every rank failed -- the usual
+/// case, as checks that can differ between ranks are made collective -- they agree within moments and the
+/// run ends normally with the status. When some rank has not failed within kAgreeSeconds it is stuck in a
+/// collective (or still working): the failing rank prints its message, naming itself, and calls
+/// MPI_Abort with the status, which ends every rank of the job (mpirun exits with that status).
+constexpr double kAgreeSeconds = 5.0;
+MPI_Comm g_error_comm = MPI_COMM_NULL;
+
+bool mpi_active() {
+  int initialized = 0, finalized = 0;
+  MPI_Initialized(&initialized);
+  MPI_Finalized(&finalized);
+  return initialized && !finalized;
+}
+
+/// Returns when every rank has failed too; otherwise reports `text` from this rank and aborts the job.
+void agree_or_abort(const std::string& text, int status) {
+  if (!mpi_active() || g_error_comm == MPI_COMM_NULL) return;
+  int size = 1, rank = 0;
+  MPI_Comm_size(g_error_comm, &size);
+  MPI_Comm_rank(g_error_comm, &rank);
+  if (size == 1) return;
+  MPI_Request request;
+  MPI_Ibarrier(g_error_comm, &request);
+  const double start = MPI_Wtime();
+  int done = 0;
+  while (!done && MPI_Wtime() - start < kAgreeSeconds) {
+    MPI_Test(&request, &done, MPI_STATUS_IGNORE);
+    if (!done) usleep(1000);
+  }
+  if (done) return;
+  std::cerr << "rank " << rank << " of " << size << ": " << text << "rank " << rank
+            << ": the other ranks did not fail with it within " << kAgreeSeconds
+            << " s (an error on some ranks only); aborting the job with exit status " << status << "\n"
+            << std::flush;
+  MPI_Abort(MPI_COMM_WORLD, status);
+}
+
+}  // namespace
+
 int run_tool(const std::function<int()>& body) {
-  const auto report = [](const std::string& text) {
+  if (mpi_active() && g_error_comm == MPI_COMM_NULL) MPI_Comm_dup(MPI_COMM_WORLD, &g_error_comm);
+  const auto report = [](const std::string& text, int status) {
+    agree_or_abort(text, status);
     if (is_output_rank()) std::cerr << text << std::flush;
+    return status;
   };
   try {
     return body();
@@ -78,14 +134,11 @@ int run_tool(const std::function<int()>& body) {
     }
     return e.status();
   } catch (const InputError& e) {
-    report(std::string("error: ") + e.what() + "\n");
-    return kExitBadInput;
+    return report(std::string("error: ") + e.what() + "\n", kExitBadInput);
   } catch (const RunError& e) {
-    report(std::string("run failed: ") + e.what() + "\n");
-    return kExitRunFailed;
+    return report(std::string("run failed: ") + e.what() + "\n", kExitRunFailed);
   } catch (const std::exception& e) {
-    report(std::string("run failed (internal error): ") + e.what() + "\n");
-    return kExitRunFailed;
+    return report(std::string("run failed (internal error): ") + e.what() + "\n", kExitRunFailed);
   }
 }
 

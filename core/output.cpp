@@ -101,6 +101,15 @@ void write_params(h5::File& f, const Scene& s) {
   f.set_attr(g, "sampling_start_s", r.sampling_start_s);
   if (r.dt_s) f.set_attr(g, "dt_s", *r.dt_s);
 
+  // [numerics]
+  const NumericsConfig& nm = s.numerics;
+  f.set_attr(g, "void_fraction_floor", nm.void_fraction_floor);
+  f.set_attr(g, "overlap_limit", nm.overlap_limit);
+  f.set_attr(g, "overlap_warning_fraction", nm.overlap_warning_fraction);
+  f.set_attr(g, "viscous_safety", nm.viscous_safety);
+  f.set_attr(g, "drag_safety", nm.drag_safety);
+  f.set_attr(g, "sort_interval_steps", nm.sort_interval_steps);
+
   // derived scales
   const DerivedScales& d = s.derived;
   f.set_attr(g, "particle_volume_m3", d.particle_volume_m3);
@@ -331,6 +340,7 @@ void Series::write(const std::string& path, MPI_Comm comm, const Scene& scene) c
     for (const Column& c : columns_) names.push_back(c.name);
     f.set_attr("/", "columns", names);
     f.set_attr("/", "rows", static_cast<std::int64_t>(rows_));
+    if (!warnings_.empty()) f.set_attr("/", "warnings", warnings_);
     for (const Column& c : columns_) {
       const std::string dataset = "/" + c.name;
       std::vector<std::uint64_t> dims{rows_};
@@ -347,6 +357,7 @@ Series Series::read(const std::string& path, MPI_Comm comm) {
   if (format != "series")
     throw InputError(path + ": not a cgd series file (cgd_format = '" + format + "', expected 'series')");
   Series s;
+  if (f.has_attr("/", "warnings")) s.warnings_ = f.attr_strings("/", "warnings");
   for (const std::string& name : f.attr_strings("/", "columns")) {
     const std::string dataset = "/" + name;
     const std::vector<std::uint64_t> dims = f.dims(dataset);

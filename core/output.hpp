@@ -67,8 +67,12 @@ class Series {
   void write(const std::string& path, MPI_Comm comm, const Scene& scene) const;
   /// Read a series file written by `write` (any rank; InputError if unreadable).
   static Series read(const std::string& path, MPI_Comm comm);
+  /// Warnings of the run (each once), written as the root attribute `warnings` (string list).
+  void add_warning(const std::string& text) { warnings_.push_back(text); }
+  const std::vector<std::string>& warnings() const { return warnings_; }
 
  private:
+  std::vector<std::string> warnings_;
   struct Column {
     std::string name, unit;
     int width = 1;

@@ -132,6 +132,13 @@ const std::vector<SectionSpec>& schema() {
         {"sampling_start", Kind::Number, "s, start of the window of time averages (after the transient)"},
         {"sampling_start_tref", Kind::Number, "start of the window of time averages in units of t_ref = u_t/g"},
         {"dt", Kind::Number, "s, explicit DEM time step"}}},
+      {"numerics",
+       {{"void_fraction_floor", Kind::Number, "smallest void fraction the fluid sees (conservative floor)"},
+        {"overlap_limit", Kind::Number, "largest relative overlap (of the diameter) before a run error"},
+        {"overlap_warning_fraction", Kind::Number, "fraction of overlap_limit at which the run warns once"},
+        {"viscous_safety", Kind::Number, "fluid step over AB2's explicit-viscosity limit"},
+        {"drag_safety", Kind::Number, "largest fluid step x beta_max / rho_p (explicit particle drag)"},
+        {"sort_interval_steps", Kind::Integer, "DEM steps between reorderings of the particles by cell"}}},
   };
   return sections;
 }
@@ -675,8 +682,11 @@ Scene build_scene(const SceneReader& in) {
                     "must be < particles.density = " + SceneReader::format_short(p.density_kg_m3) +
                         " kg/m^3 (the particles must sink)");
     if (auto v = in.number("fluid", "viscosity")) f.viscosity_Pa_s = in.positive("fluid", "viscosity", *v);
+    // AB2 with central advection (sim/fluid/solver.hpp, von Neumann): |G| <= 1 for Co <= 0.5 only
     if (auto v = in.number("fluid", "courant"))
-      f.courant = in.in_range("fluid", "courant", *v, 0.0, 1.0, true);
+      f.courant = in.in_range("fluid", "courant", *v, 0.0, 0.5, true,
+                              "; above 0.5 the fluid scheme -- Adams-Bashforth 2 with central advection -- is "
+                              "unstable: its amplification factor exceeds 1 for Co = sum_d |u_d| dt/h_d > 0.5");
     f.coupling = in.choice<Coupling>(
         "fluid", "coupling",
         {{"two-way", Coupling::TwoWay}, {"one-way", Coupling::OneWay}, {"quiescent", Coupling::Quiescent}},
@@ -757,6 +767,25 @@ Scene build_scene(const SceneReader& in) {
   if (auto v = in.number("run", "checkpoint_wall_s"))
     r.checkpoint_wall_s = in.positive("run", "checkpoint_wall_s", *v);
   if (auto v = in.number("run", "dt")) r.dt_s = in.positive("run", "dt", *v);
+
+  // [numerics]
+  NumericsConfig& nm = s.numerics;
+  if (auto v = in.number("numerics", "void_fraction_floor"))
+    nm.void_fraction_floor = in.in_range("numerics", "void_fraction_floor", *v, 0.0, 1.0, false);
+  if (auto v = in.number("numerics", "overlap_limit"))
+    nm.overlap_limit = in.in_range("numerics", "overlap_limit", *v, 0.0, 1.0, true);
+  if (auto v = in.number("numerics", "overlap_warning_fraction"))
+    nm.overlap_warning_fraction = in.in_range("numerics", "overlap_warning_fraction", *v, 0.0, 1.0, true);
+  if (auto v = in.number("numerics", "viscous_safety"))
+    nm.viscous_safety = in.in_range("numerics", "viscous_safety", *v, 0.0, 0.99, true,
+                                    "; measured stable up to 0.99 for the roughest eps fields, solver.hpp");
+  if (auto v = in.number("numerics", "drag_safety"))
+    nm.drag_safety = in.in_range("numerics", "drag_safety", *v, 0.0, 1.0, true,
+                                 "; explicit particle drag over a fluid step overshoots above 1");
+  if (auto v = in.integer("numerics", "sort_interval_steps")) {
+    if (*v < 1) in.fail_value("numerics", "sort_interval_steps", "must be an integer >= 1");
+    nm.sort_interval_steps = *v;
+  }
 
   // ---- derived numbers (models.md) ----
   DerivedScales& x = s.derived;
@@ -854,6 +883,33 @@ Scene build_scene(const SceneReader& in) {
                       " m^3; raise it or enlarge the box");
   if (count > 9e15) in.fail_value("particles", "solids_fraction", "gives more particles than can be counted");
   x.particle_count = static_cast<std::int64_t>(count);
+
+  // ---- nonsense that validates key by key but cannot be run (issue 10, item 5) ----
+  // The drag laws' range (core/drag.hpp): Beetstra was fitted to lattice-Boltzmann data for Re < 1000, Wen-Yu's
+  // C_d switches to Newton's 0.44 above 1000, Stokes drag holds for Re << 1. A terminal Reynolds number far
+  // outside is almost always a unit mistake (a diameter in um or mm given as m).
+  if (s.fluid && x.re_p > 1000.0)
+    in.fail_value("particles", "diameter",
+                  "gives a terminal Reynolds number Re_p = " + SceneReader::format_short(x.re_p) +
+                      " (u_t = " + SceneReader::format_short(x.u_t_m_s) +
+                      " m/s), outside the range the drag laws were fitted for (Re_p <= 1000); the diameter is "
+                      "in metres (75 um is 75e-6)");
+  // A run that would do no step: the run does round(end_time / dt_DEM) steps.
+  if (std::llround(r.end_time_s / x.dt_dem_s) < 1)
+    in.fail_value("run", in.has("run", "end_time") ? "end_time" : "end_time_tref",
+                  "is shorter than one DEM step (dt_DEM = " + SceneReader::format_short(x.dt_dem_s) +
+                      " s): the run would do no step; lengthen it or shorten the step (contact.t_star)");
+  // A fluid step is a whole number of DEM steps: a DEM step above the fluid's Courant step at u_t
+  // would advance the fluid by more than the Courant number allows from the first step on.
+  if (s.solves_fluid() && x.dt_dem_s > x.dt_fluid_s)
+    in.fail(std::string("the DEM step dt_DEM = ") + SceneReader::format_short(x.dt_dem_s) +
+            " s (contact.t_star x t_c) is longer than the fluid step " + SceneReader::format_short(x.dt_fluid_s) +
+            " s (fluid.courant x cell / u_t): a fluid step is a whole number of DEM steps; lower contact.t_star, "
+            "stiffen the contacts (contact.gamma_star / contact.stiffness) or use larger cells");
+  if (s.fluid && s.fluid->drag == DragLaw::Stokes && x.re_p > 10.0)
+    s.warnings.push_back("fluid.drag = \"stokes\" at Re_p = " + SceneReader::format_short(x.re_p) +
+                         ": Stokes drag holds for Re_p << 1 and underestimates the drag here by 1 + 0.15 Re^0.687 = " +
+                         SceneReader::format_short(1.0 + 0.15 * std::pow(x.re_p, 0.687)));
   // Measured peak per particle (bench/README.md): ~300 B of DEM arrays (double-buffered state, neighbour
   // list with history, ghosts) plus placement and I/O buffers: 450 B is the peak seen at 200k-600k particles.
   x.memory_estimate_bytes = count * 450.0;
@@ -937,6 +993,55 @@ std::string bytes(double b) {
 }
 
 }  // namespace
+
+bool restart_may_change(const std::string& key) {
+  static const std::set<std::string> allowed = {
+      "run.end_time",        "run.end_time_tref",        "run.dump_interval", "run.dump_interval_tref",
+      "run.series_interval", "run.series_interval_tref", "run.checkpoint_wall_s"};
+  return allowed.count(key) != 0;
+}
+
+namespace {
+bool same_value(const toml::node& a, const toml::node& b) {
+  if ((a.is_integer() || a.is_floating_point()) && (b.is_integer() || b.is_floating_point()))
+    return a.value<double>() == b.value<double>();
+  const toml::array* x = a.as_array();
+  const toml::array* y = b.as_array();
+  if (x && y) {
+    if (x->size() != y->size()) return false;
+    for (std::size_t i = 0; i < x->size(); ++i)
+      if (!same_value(*x->get(i), *y->get(i))) return false;
+    return true;
+  }
+  return format_node(a) == format_node(b);
+}
+}  // namespace
+
+std::vector<std::string> restart_differences(const std::string& checkpoint_toml, const std::string& given_toml) {
+  toml::table then, now;
+  try {
+    then = toml::parse(checkpoint_toml, std::string_view("checkpoint scene"));
+    now = toml::parse(given_toml, std::string_view("scene"));
+  } catch (const toml::parse_error& e) {
+    throw InputError(std::string("the checkpoint's stored scene cannot be read: ") + std::string(e.description()));
+  }
+  std::vector<std::string> out;
+  for (const auto& section : schema()) {
+    const toml::table* a = then[section.name].as_table();
+    const toml::table* b = now[section.name].as_table();
+    for (const auto& key : section.keys) {
+      const std::string name = std::string(section.name) + "." + key.name;
+      if (restart_may_change(name)) continue;
+      const toml::node* x = a ? a->get(key.name) : nullptr;
+      const toml::node* y = b ? b->get(key.name) : nullptr;
+      if (!x && !y) continue;
+      if (x && y && same_value(*x, *y)) continue;
+      out.push_back(name + " = " + (x ? format_node(*x) : std::string("(not given)")) + " in the checkpoint, " +
+                    (y ? format_node(*y) : std::string("(not given)")) + " now");
+    }
+  }
+  return out;
+}
 
 std::string describe_scene(const Scene& s) {
   std::ostringstream out;
@@ -1036,6 +1141,14 @@ std::string describe_scene(const Scene& s) {
     row("cells", "none (no grid)");
   }
   row("memory estimate", bytes(x.memory_estimate_bytes));
+  const NumericsConfig& nm = s.numerics;
+  row("numerics", "overlap limit " + num(nm.overlap_limit) + " d (warning at " + num(nm.overlap_warning_fraction) +
+                      " of it), sort every " + std::to_string(nm.sort_interval_steps) + " steps" +
+                      (s.solves_fluid() ? ", void-fraction floor " + num(nm.void_fraction_floor) +
+                                              ", viscous safety " + num(nm.viscous_safety) + ", drag safety " +
+                                              num(nm.drag_safety)
+                                        : std::string()));
+  for (const std::string& w : s.warnings) out << "warning: " << w << "\n";
   return out.str();
 }
 

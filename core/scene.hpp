@@ -65,6 +65,17 @@ struct RunConfig {
   std::optional<double> dt_s;         // explicit time step (needed when contact.model = "none" and no fluid)
 };
 
+/// Numerical constants that change results (issue 10, item 6); the defaults are the values the engine
+/// was verified with. Scene section [numerics]; every one is written to the files' /params.
+struct NumericsConfig {
+  double void_fraction_floor = 0.3;        // eps_min of the coupling's conservative floor (coupler.hpp)
+  double overlap_limit = 0.25;             // largest relative overlap (of the diameter) before a run error
+  double overlap_warning_fraction = 0.5;   // warn once when the largest overlap passes this x overlap_limit
+  double viscous_safety = 0.8;             // fluid step <= this x AB2's explicit-viscosity limit (solver.hpp)
+  double drag_safety = 0.5;                // fluid step x beta_max / rho_p <= this (explicit particle drag)
+  std::int64_t sort_interval_steps = 1000; // DEM steps between reorderings of the particles by cell
+};
+
 /// Numbers derived from the scene, printed at start and stored in every output file (/params).
 struct DerivedScales {
   double particle_volume_m3 = 0;      // primary particle volume V_p
@@ -99,7 +110,9 @@ struct Scene {
   ContactConfig contact;
   std::optional<FluidConfig> fluid;   // absent: dry granular run, no grid
   RunConfig run;
+  NumericsConfig numerics;
   DerivedScales derived;
+  std::vector<std::string> warnings;  // odd but possibly meant: printed with the scene (describe_scene)
 
   bool has_contacts() const { return contact.model != ContactModel::None; }
   bool has_friction() const { return has_contacts() && contact.friction > 0.0; }
@@ -113,6 +126,15 @@ Scene load_scene(const std::string& path, const std::vector<std::string>& overri
 /// Same, from TOML text (tests); `origin` stands in for the file name in messages.
 Scene load_scene_from_string(const std::string& toml_text, const std::string& origin,
                              const std::vector<std::string>& overrides = {});
+
+/// The keys a restart may change (the run's end, its snapshot, series and checkpoint intervals): every
+/// other key is physics, and a restart that changes it would continue a different simulation.
+bool restart_may_change(const std::string& section_dot_key);
+
+/// Every key other than those a restart may change whose value differs between two scenes given as
+/// effective TOML text (Scene::effective_toml), one line each: "section.key = OLD in the checkpoint, NEW
+/// now" (a key given in only one of them counts as a difference). Numbers compare by value.
+std::vector<std::string> restart_differences(const std::string& checkpoint_toml, const std::string& given_toml);
 
 /// Human-readable table of the effects that are on and the derived numbers (printed at start).
 std::string describe_scene(const Scene& scene);

@@ -6,6 +6,7 @@
 #include <cmath>
 #include <csignal>
 #include <cstdio>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <memory>
@@ -57,6 +58,27 @@ void write_text_atomically(const fs::path& path, const std::string& text) {
   fs::rename(tmp, path);
 }
 
+/// A file operation rank 0 does alone, its failure thrown as RunError on every rank (so that no rank is
+/// left waiting in its next collective call). Collective.
+template <class F>
+void on_rank0(MPI_Comm comm, F&& op) {
+  int rank = 0;
+  MPI_Comm_rank(comm, &rank);
+  std::string error;
+  if (rank == 0) {
+    try {
+      op();
+    } catch (const std::exception& e) {
+      error = std::string(e.what()).empty() ? "file operation failed" : e.what();
+    }
+  }
+  int length = static_cast<int>(error.size());
+  MPI_Bcast(&length, 1, MPI_INT, 0, comm);
+  error.resize(static_cast<std::size_t>(length));
+  MPI_Bcast(error.data(), length, MPI_CHAR, 0, comm);
+  if (!error.empty()) throw RunError(error + " (on rank 0)");
+}
+
 }  // namespace
 
 dem::DemSettings dem_settings_from_scene(const Scene& scene) {
@@ -75,6 +97,8 @@ dem::DemSettings dem_settings_from_scene(const Scene& scene) {
   s.contact.friction = scene.contact.friction;
   s.contact.dt = d.dt_dem_s;
   s.skin_m = scene.contact.skin_over_dp * d.parcel_diameter_m;
+  s.overlap_limit = scene.numerics.overlap_limit;
+  s.sort_interval_steps = scene.numerics.sort_interval_steps;
   const Vec3& g = scene.domain.gravity_m_s2;
   s.drive.accel = {g[0], g[1], g[2]};
   if (scene.fluid && scene.solves_fluid()) {
@@ -102,6 +126,26 @@ dem::DemSettings dem_settings_from_scene(const Scene& scene) {
   return s;
 }
 
+PeriodicDriving periodic_driving(const Scene& scene) {
+  const FluidConfig& f = *scene.fluid;
+  const double volume = scene.domain.size_m[0] * scene.domain.size_m[1] * scene.domain.size_m[2];
+  const double phi = static_cast<double>(scene.derived.particle_count) * std::pow(scene.particles.parcel_size, 3) *
+                     scene.derived.particle_volume_m3 / volume;
+  const double rho_p = scene.particles.density_kg_m3, rho_f = f.density_kg_m3;
+  const double rho_mix = phi * rho_p + (1.0 - phi) * rho_f;
+  // density whose weight the mean pressure gradient carries (see run.hpp)
+  double carried = rho_f;
+  if (f.coupling == Coupling::TwoWay) carried = f.pressure_gradient_force ? rho_mix : rho_mix / (1.0 - phi);
+  const Vec3& g = scene.domain.gravity_m_s2;
+  PeriodicDriving d;
+  for (int c = 0; c < 3; ++c) {
+    d.pressure_gradient_mean_Pa_m[c] = carried * g[c];
+    d.fluid_body_force_N_m3[c] = (rho_f - carried) * g[c];
+    d.particle_body_accel_m_s2[c] = f.pressure_gradient_force ? g[c] * (1.0 - carried / rho_p) : g[c];
+  }
+  return d;
+}
+
 namespace {
 
 /// The fluid grid of a scene that solves the fluid (nullptr otherwise). Throws InputError when the
@@ -125,13 +169,6 @@ dem::DemSettings make_dem_settings(const Scene& scene, const fluid::FluidGrid* g
   return s;
 }
 
-/// Mixture density of the periodic sedimentation driving (models.md): <phi> rho_p + <eps> rho_f.
-double mixture_density(const Scene& scene) {
-  const double volume = scene.domain.size_m[0] * scene.domain.size_m[1] * scene.domain.size_m[2];
-  const double phi = static_cast<double>(scene.derived.particle_count) * std::pow(scene.particles.parcel_size, 3) *
-                     scene.derived.particle_volume_m3 / volume;
-  return phi * scene.particles.density_kg_m3 + (1.0 - phi) * scene.fluid->density_kg_m3;
-}
 
 struct Frame {
   std::int64_t step;
@@ -159,19 +196,50 @@ class RunDriver {
     t_output_ = run_timers_.add("output");
     t_checkpoint_ = run_timers_.add("checkpoint");
     t_diag_ = run_timers_.add("diagnostics");
-    if (grid_) setup_fluid();
+    if (grid_) {
+      setup_fluid();
+      end_step_ = coupled_end_step(end_step_, dump_every_, scene_.run.end_time_s, scene_.run.dump_interval_s);
+    }
+  }
+
+  /// Coupled runs whose end time is a whole number k of snapshot intervals end on the k-th snapshot step.
+  /// Rounding both times to DEM steps separately can leave the end up to k/2 DEM steps past the last
+  /// snapshot: a final fluid step of a few DEM steps, whose continuity source -- the eps change of the whole
+  /// previous fluid step (deposited at the step's start, coupler.hpp) over its own short dt -- spoils the
+  /// final snapshot's fluid fields (measured: a pressure gradient of 1.9e4 Pa/m and 0.37 m/s at the
+  /// particles after a one-DEM-step final step). The end moves by at most k/2 DEM steps.
+  static std::int64_t coupled_end_step(std::int64_t end_step, std::int64_t dump_every, double end_s, double dump_s) {
+    if (dump_every <= 0 || !(dump_s > 0)) return end_step;
+    const double k = std::round(end_s / dump_s);
+    if (k >= 1 && std::abs(end_s / dump_s - k) < 1e-6 * k) return static_cast<std::int64_t>(k) * dump_every;
+    return end_step;
   }
 
   void run() {
     check_directory();
-    // Placement can still refuse the scene (InputError): do it before anything is written.
+    // Placement and the checkpoint can still refuse the scene (InputError): both before anything is written.
     if (!settings_.restart) initial_state();
-    if (rank_ == 0) {
+    else load_checkpoint();
+    if (settings_.restart && restarted_from_ == end_step_) {
+      int done = rank_ == 0 && fs::exists(dir_ / "DONE") ? 1 : 0;
+      MPI_Bcast(&done, 1, MPI_INT, 0, comm_);
+      if (done) {  // nothing to run: leave the completed run as it is
+        if (rank_ == 0)
+          std::cout << settings_.tool << ": " << dir_.string() << " is already complete at step " << end_step_
+                    << " (t = " << static_cast<double>(end_step_) * dt_
+                    << " s); nothing to do (raise run.end_time to continue it)\n"
+                    << std::flush;
+        return;
+      }
+    }
+    on_rank0(comm_, [&] {
       fs::create_directories(dir_ / "snapshots");
       write_text_atomically(dir_ / "scene.toml", scene_.effective_toml);
-    }
+    });
+    // Test hook of the one-rank-error handling (tests/e2e/rank_errors.sh): an error on one rank only.
+    if (const char* r = std::getenv("CGD_TEST_FAIL_ON_RANK"); r && std::atoi(r) == rank_)
+      throw RunError("failure injected on rank " + std::to_string(rank_) + " (CGD_TEST_FAIL_ON_RANK)");
     MPI_Barrier(comm_);
-    if (settings_.restart) load_checkpoint();
     print_banner();
     std::signal(SIGINT, on_signal);
     std::signal(SIGTERM, on_signal);
@@ -182,12 +250,12 @@ class RunDriver {
  private:
   void setup_fluid() {
     const FluidConfig& f = *scene_.fluid;
-    const double rho_mix = mixture_density(scene_);
-    const Vec3& g = scene_.domain.gravity_m_s2;
+    const PeriodicDriving driving = periodic_driving(scene_);
     fluid::FluidSettings fs;
     fs.density_kg_m3 = f.density_kg_m3;
     fs.viscosity_Pa_s = f.viscosity_Pa_s;
-    for (int d = 0; d < 3; ++d) fs.body_force_per_fluid_volume_N_m3[d] = (f.density_kg_m3 - rho_mix) * g[d];
+    fs.body_force_per_fluid_volume_N_m3 = driving.fluid_body_force_N_m3;
+    fs.viscous_safety = scene_.numerics.viscous_safety;
     t_coupling_ = run_timers_.add("coupling");
     fluid_ = std::make_unique<fluid::FluidSolver>(*grid_, fs, &run_timers_);
     coupling::CouplerSettings cs;
@@ -199,13 +267,15 @@ class RunDriver {
     cs.particle_mass_kg = scene_.derived.parcel_mass_kg;
     cs.two_way = f.coupling == Coupling::TwoWay;
     cs.pressure_gradient_force = f.pressure_gradient_force;
-    for (int d = 0; d < 3; ++d) cs.particle_body_accel[d] = g[d] * (1.0 - rho_mix / scene_.particles.density_kg_m3);
+    cs.void_fraction_floor = scene_.numerics.void_fraction_floor;
+    cs.particle_body_accel = driving.particle_body_accel_m_s2;
     coupler_ = std::make_unique<coupling::Coupler>(cs, *grid_);
-    pressure_gradient_mean_ = {rho_mix * g[0], rho_mix * g[1], rho_mix * g[2]};
+    pressure_gradient_mean_ = driving.pressure_gradient_mean_Pa_m;
     // Particle drag is explicit over a fluid step (momentum exchange exact, coupler.hpp): keep
-    // dt_fluid beta_max / rho_p <= 0.5, beta_max at the densest admissible state (eps at its floor).
+    // dt_fluid beta_max / rho_p <= numerics.drag_safety (0.5), beta_max at the densest admissible state
+    // (eps at its floor).
     const double beta_max = beta_p(f.drag, cs.drag_params, cs.filtered, 1.0 - cs.void_fraction_floor, 0.0);
-    dt_fluid_cap_ = 0.5 * scene_.particles.density_kg_m3 / beta_max;
+    dt_fluid_cap_ = scene_.numerics.drag_safety * scene_.particles.density_kg_m3 / beta_max;
     // A fluid step is a whole number of DEM steps: a DEM step longer than the fluid's stability
     // limits (explicit viscosity, explicit particle drag) cannot be run; refuse it before writing.
     const double limit = std::min(fluid_->viscous_dt_limit(), dt_fluid_cap_);
@@ -236,26 +306,22 @@ class RunDriver {
   }
 
   void initial_state() {
-    dem::Placement placement;
+    // Distributed and the same for any rank count (placement.hpp); the first rebuild migrates each
+    // particle to the rank that owns its slab.
+    dem::LocalPlacement placement;
+    const double t0 = wall_seconds();
     try {
-      placement = dem::place_particles(scene_.domain.size_m, dem_.settings().diameter_m, scene_.derived.particle_count,
-                                       scene_.particles.velocity_rms_m_s, scene_.particles.seed);
+      placement = dem::place_particles_distributed(comm_, scene_.domain.size_m, dem_.settings().diameter_m,
+                                                   scene_.derived.particle_count, scene_.particles.velocity_rms_m_s,
+                                                   scene_.particles.seed);
     } catch (const InputError& e) {
       throw InputError(scene_.source_path + ": particles.solids_fraction = " +
                        std::to_string(scene_.particles.solids_fraction) + ": " + e.what());
     }
+    placement_seconds_ = wall_seconds() - t0;
     placement_method_ = placement.method;
     placement_gap_ = placement.min_gap_rel;
-    std::vector<std::int64_t> ids;
-    std::vector<double> x, v;
-    for (std::int64_t i = 0; i < scene_.derived.particle_count; ++i) {
-      const double* p = &placement.position[3 * i];
-      if (dem_.slabs().owner(p[1]) != rank_) continue;
-      ids.push_back(i);
-      x.insert(x.end(), p, p + 3);
-      v.insert(v.end(), &placement.velocity[3 * i], &placement.velocity[3 * i + 3]);
-    }
-    dem_.set_particles(std::move(ids), std::move(x), std::move(v), {});
+    dem_.set_particles(std::move(placement.id), std::move(placement.position), std::move(placement.velocity), {});
     declare_series();
   }
 
@@ -392,7 +458,7 @@ class RunDriver {
       std::int64_t n = f.count;
       MPI_Allreduce(MPI_IN_PLACE, &n, 1, MPI_INT64_T, MPI_SUM, comm_);
       frames_.push_back({step, static_cast<double>(step) * dt_, n});
-      if (rank_ == 0) schema::write_xdmf(dir_.string(), xdmf_frames());
+      on_rank0(comm_, [&] { schema::write_xdmf(dir_.string(), xdmf_frames()); });
     }
   }
 
@@ -444,6 +510,9 @@ class RunDriver {
       frame_times.push_back(f.time);
       frame_counts.push_back(f.count);
     }
+    // The series first: a kill between the two leaves a series that reaches past the older checkpoint
+    // (a restart cuts it back), never one that stops short of the newer checkpoint (a gap of rows).
+    write_series();
     h5::write_atomically((dir_ / "checkpoint.h5").string(), comm_, [&](h5::File& file) {
       schema::write_common(file, "checkpoint", scene_);
       file.set_attr("/", "step", dem_.step_index());
@@ -472,7 +541,6 @@ class RunDriver {
       file.write_rows("/contacts/spring", store.xi.data(), m, 3);
       if (fluid_) write_fluid_state(file);
     });
-    write_series();
     last_checkpoint_wall_ = wall_seconds();
   }
 
@@ -517,6 +585,10 @@ class RunDriver {
     const std::string path = (dir_ / "checkpoint.h5").string();
     h5::File file = h5::File::open_read(path, comm_);
     const std::int64_t step = file.attr_int("/", "step");
+    if (step > end_step_)
+      throw InputError(scene_.source_path + ": run.end_time = " + std::to_string(scene_.run.end_time_s) +
+                       " s is before the checkpoint's time " + std::to_string(static_cast<double>(step) * dt_) +
+                       " s (" + path + "): a restart can only continue a run; give an end time at or after it");
     const std::int64_t ranks_then = file.attr_int("/", "ranks");
     const std::vector<std::int64_t> counts = file.attr_ints("/", "rank_particle_counts");
     const std::vector<std::int64_t> ccounts = file.attr_ints("/", "rank_contact_counts");
@@ -602,6 +674,7 @@ class RunDriver {
     if (fs::exists(series_path)) {
       series_ = schema::Series::read(series_path.string(), comm_);
       series_.truncate_after((static_cast<double>(step) - 0.5) * dt_);
+      overlap_warned_ = !series_.warnings().empty();  // warned once per run, restarts included
     } else {
       declare_series();
     }
@@ -616,7 +689,9 @@ class RunDriver {
     o << describe_scene(scene_);
     o << "MPI ranks: " << ranks_ << " (slabs along y)\n";
     if (restarted_from_ >= 0) o << "restart from checkpoint at step " << restarted_from_ << "\n";
-    else o << "placement: " << placement_method_ << ", smallest gap " << placement_gap_ << " d\n";
+    else
+      o << "placement: " << placement_method_ << ", smallest gap " << placement_gap_ << " d, " << placement_seconds_
+        << " s\n";
     o << "steps: " << end_step_ << " of " << dt_ << " s; snapshots every " << dump_every_ << " steps; series every "
       << series_every_ << " steps\n";
     o << "output: " << dir_.string() << "\n";
@@ -652,6 +727,7 @@ class RunDriver {
       snapshot_if_due(step, final_step);
       if (final_step) break;
       or_diagnose([&] { dem_.commit(); });
+      warn_if_overlap_high();
       progress(dem_.step_index(), false);
     }
     progress(end_step_, true);
@@ -696,7 +772,41 @@ class RunDriver {
                      std::to_string(static_cast<double>(step) * dt_) + " s); checkpoint written, continue with " +
                      "--restart");
     }
-    if (flags[1] && step != restarted_from_) write_checkpoint();
+    if ((flags[1] || checkpoint_requested_) && step != restarted_from_) write_checkpoint();
+    checkpoint_requested_ = false;
+  }
+
+  /// Once per run, when the largest overlap (global, DemSystem::commit) passes numerics.
+  /// overlap_warning_fraction of numerics.overlap_limit: say so on stderr and in the series, with the
+  /// contact stiffness that would keep it below, and checkpoint at the next chance (a state before the
+  /// likely failure). The peak overlap of an impact at speed v is v sqrt(m_eff/k_n), so it scales as
+  /// k_n^(-1/2), i.e. linearly with gamma* (models.md: k_n ~ gamma*^-2).
+  void warn_if_overlap_high() {
+    if (overlap_warned_) return;
+    const NumericsConfig& nm = scene_.numerics;
+    const double overlap = dem_.last_max_overlap_rel();
+    const double threshold = nm.overlap_warning_fraction * nm.overlap_limit;
+    if (!(overlap > threshold)) return;
+    overlap_warned_ = true;
+    checkpoint_requested_ = true;
+    const std::int64_t step = dem_.step_index();
+    std::ostringstream o;
+    o.precision(3);
+    o << "warning at step " << step << " (t = " << static_cast<double>(step) * dt_ << " s): the largest overlap reached "
+      << 100.0 * overlap << " % of the diameter, " << 100.0 * overlap / nm.overlap_limit << " % of the limit "
+      << 100.0 * nm.overlap_limit << " % at which the run stops (numerics.overlap_limit). Overlaps scale as "
+      << "k_n^(-1/2), i.e. with gamma*: ";
+    // aim at 0.8 of the threshold: the step that crossed it need not be the impact's deepest
+    const double scale = 0.8 * threshold / overlap;
+    if (scene_.contact.gamma_star)
+      o << "contact.gamma_star = " << *scene_.contact.gamma_star * scale << " (now " << *scene_.contact.gamma_star << ")";
+    else
+      o << "contact.stiffness = " << scene_.derived.k_n_N_m / scene_.particles.parcel_size / (scale * scale)
+        << " N/m (now " << scene_.derived.k_n_N_m / scene_.particles.parcel_size << ")";
+    o << " would keep impacts like these below " << 100.0 * threshold
+      << " % (with a proportionally shorter DEM step); faster impacts later (clusters) need more";
+    series_.add_warning(o.str());
+    if (rank_ == 0) std::cerr << o.str() << "\n" << std::flush;
   }
 
   /// Coupled CFD-DEM: one fluid step, then its DEM sub-steps with the fluid forces held constant
@@ -744,7 +854,10 @@ class RunDriver {
           ScopedPhase t(run_timers_, t_coupling_);
           coupler_->compute_particle_forces(dem_.particles(), fluid_->state());
         }
-        for (std::int64_t k = 0; k < n_sub; ++k) dem_.step();
+        for (std::int64_t k = 0; k < n_sub; ++k) {
+          dem_.step();
+          warn_if_overlap_high();
+        }
       });
       progress(dem_.step_index(), false);
     }
@@ -806,12 +919,11 @@ class RunDriver {
                     total_bytes / std::max<double>(1, static_cast<double>(n)), total_bytes / 1e6);
       o << line;
       std::cout << o.str() << std::flush;
-      std::ostringstream done;
-      done << "completed " << end_step_ << " steps, t = " << static_cast<double>(end_step_) * dt_ << " s, " << n
-           << " particles, " << wall << " s wall\n";
-      write_text_atomically(dir_ / "DONE", done.str());
     }
-    MPI_Barrier(comm_);
+    std::ostringstream done;
+    done << "completed " << end_step_ << " steps, t = " << static_cast<double>(end_step_) * dt_ << " s, " << n
+         << " particles, " << wall << " s wall\n";
+    on_rank0(comm_, [&] { write_text_atomically(dir_ / "DONE", done.str()); });
   }
 
   const Scene& scene_;
@@ -837,12 +949,49 @@ class RunDriver {
   double loop_start_wall_ = 0;
   std::int64_t loop_start_step_ = 0, restarted_from_ = -1;
   std::string placement_method_;
-  double placement_gap_ = 0;
+  double placement_gap_ = 0, placement_seconds_ = 0;
+  bool overlap_warned_ = false, checkpoint_requested_ = false;
 };
 
 }  // namespace
 
+Scene restart_scene(const Scene& scene, const std::string& output_dir, MPI_Comm comm) {
+  const fs::path path = fs::path(output_dir) / "checkpoint.h5";
+  int rank = 0, exists = 0;
+  MPI_Comm_rank(comm, &rank);
+  if (rank == 0) exists = fs::exists(path) ? 1 : 0;
+  MPI_Bcast(&exists, 1, MPI_INT, 0, comm);
+  if (!exists)
+    throw InputError(path.string() + ": no checkpoint to restart from (--restart needs a run directory written by " +
+                     "an earlier run of this scene)");
+  std::string stored, name;
+  {
+    h5::File file = h5::File::open_read(path.string(), comm);
+    stored = file.attr_string("/", "scene");
+    name = file.attr_string("/params", "scene_name");
+  }
+  const std::vector<std::string> diff = restart_differences(stored, scene.effective_toml);
+  if (!diff.empty()) {
+    std::string message = scene.source_path + ": the scene differs from the one the run in " + output_dir +
+                          " was started with, in " + std::to_string(diff.size()) +
+                          " key(s); a restart continues the same simulation, so only run.end_time, "
+                          "run.dump_interval, run.series_interval and run.checkpoint_wall_s (or their _tref forms) "
+                          "may change (start a new run in another directory for anything else):";
+    for (const std::string& d : diff) message += "\n  " + d;
+    throw InputError(message);
+  }
+  Scene out = scene;
+  out.name = name;  // restarting from the run's own scene.toml keeps the scene's name
+  return out;
+}
+
 void run_scene(const Scene& scene, const RunSettings& settings, MPI_Comm comm) {
+  if (settings.restart) {
+    const Scene restarted = restart_scene(scene, settings.output_dir, comm);
+    RunDriver driver(restarted, settings, comm);
+    driver.run();
+    return;
+  }
   RunDriver driver(scene, settings, comm);
   driver.run();
 }

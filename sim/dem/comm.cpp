@@ -192,8 +192,19 @@ void GhostExchange::forward(Particles& p) {
 
 void GhostExchange::migrate(Particles& p, ContactStore& store) {
   p.resize(p.n_owned, p.n_owned);
+  if (slabs_.size() == 1) return;
+  for (;;) {
+    int leaving = 0;
+    for (std::size_t i = 0; i < p.n_owned && !leaving; ++i)
+      if (slabs_.owner(p.x[3 * i + 1]) != slabs_.rank()) leaving = 1;
+    MPI_Allreduce(MPI_IN_PLACE, &leaving, 1, MPI_INT, MPI_MAX, slabs_.comm());
+    if (!leaving) return;
+    migrate_hop(p, store);
+  }
+}
+
+void GhostExchange::migrate_hop(Particles& p, ContactStore& store) {
   const int size = slabs_.size();
-  if (size == 1) return;
   const int rank = slabs_.rank();
   const bool track_contacts = store.offset.size() == p.n_owned + 1;
   const int per = p.rotation ? 9 : 6;
@@ -222,10 +233,9 @@ void GhostExchange::migrate(Particles& p, ContactStore& store) {
       }
       continue;
     }
-    if (dest != slabs_.down() && dest != slabs_.up())
-      throw RunError("particle " + std::to_string(p.id[i]) + " moved more than one slab (y = " +
-                     std::to_string(p.x[3 * i + 1]) + " m) between neighbour-list rebuilds");
-    std::vector<double>& out = dest == slabs_.down() ? out_down : out_up;
+    // one slab toward the owner, the shorter way round the ring (up when dest is at most size/2 above)
+    const bool upward = (dest - rank + size) % size <= size / 2;
+    std::vector<double>& out = upward ? out_up : out_down;
     out.push_back(bits_to_double(p.id[i]));
     out.insert(out.end(), &p.x[3 * i], &p.x[3 * i + 3]);
     out.insert(out.end(), &p.v[3 * i], &p.v[3 * i + 3]);

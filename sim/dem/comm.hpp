@@ -54,7 +54,9 @@ class GhostExchange {
   /// Refresh ghost positions and velocities (and angular velocities) from their sources.
   void forward(Particles& p);
   /// Move owned particles whose (wrapped) y lies outside this slab to the owning rank, with their
-  /// contact records. Ghosts are dropped. Throws RunError if a particle skipped a whole slab.
+  /// contact records. Ghosts are dropped. A particle bound further than a neighbouring slab (a thin slab
+  /// crossed between rebuilds) travels hop by hop, one slab per pass the shorter way round the periodic
+  /// ring, until no rank holds another's particle (one reduction per pass). Collective.
   void migrate(Particles& p, ContactStore& store);
   /// Number of ghosts of the last build.
   std::size_t ghosts() const { return ghosts_; }
@@ -69,6 +71,8 @@ class GhostExchange {
     std::size_t recv_first = 0, recv_count = 0;
   };
   void pack(const Particles& p, const Swap& s, std::vector<double>& buf) const;
+  /// One pass of migrate: every particle not owned here moves one slab toward its owner.
+  void migrate_hop(Particles& p, ContactStore& store);
   const SlabDecomposition& slabs_;
   std::vector<Swap> swaps_;
   std::vector<double> send_buf_, recv_buf_;

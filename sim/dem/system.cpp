@@ -25,12 +25,15 @@ DemSystem::DemSystem(const DemSettings& settings, MPI_Comm comm)
   t_comm_ = timers_.add("comm");
   t_force_ = timers_.add("force+integrate");
   if (s_.contacts) {
-    const double slab = slabs_.y_hi() - slabs_.y_lo();
+    // the thinnest slab of all ranks (uneven FFTW blocks): every rank decides alike (no rank left waiting)
+    double slab = slabs_.y_hi() - slabs_.y_lo();
+    MPI_Allreduce(MPI_IN_PLACE, &slab, 1, MPI_DOUBLE, MPI_MIN, slabs_.comm());
     if (slab < cutoff())
-      throw InputError("too many MPI ranks (" + std::to_string(slabs_.size()) + ") for the box: each y-slab (" +
+      throw InputError("too many MPI ranks (" + std::to_string(slabs_.size()) + ") for the box: each y-slab (the thinnest " +
                        std::to_string(slab) + " m) must be at least one contact cutoff (" +
                        std::to_string(cutoff()) + " m) high; use at most " +
-                       std::to_string(static_cast<int>(s_.box_m[1] / cutoff())) + " ranks");
+                       std::to_string(static_cast<int>(s_.box_m[1] / cutoff())) +
+                       " ranks of equal slabs (a fluid grid's FFTW blocks can be unequal: its thinnest slab counts)");
   }
 }
 

@@ -27,7 +27,7 @@ expect_bad() {
   while [ "$1" != "--" ]; do expected+=("$1"); shift; done
   shift
   rm -rf "$tmp/out"
-  "$generate" "$@" -o "$tmp/out" >"$tmp/stdout" 2>"$tmp/stderr"
+  timeout 120 "$generate" "$@" -o "$tmp/out" >"$tmp/stdout" 2>"$tmp/stderr"  # a refusal is immediate
   local status=$?
   local ok=1
   if [ "$status" -ne 2 ]; then echo "FAIL $name: exit status $status, expected 2"; ok=0; fi
@@ -63,6 +63,13 @@ expect_bad set-without-equals    "--set particles.solids_fraction" "SECTION.KEY=
 expect_bad set-unknown-key       "fluid.drg" "fluid.drag"                                   -- "$base" --set fluid.drg=stokes
 expect_bad set-out-of-range      "particles.diameter = -1e-05 (from --set)" "must be > 0"   -- "$base" --set particles.diameter=-1e-5
 expect_bad unknown-option        "--bogus"                                                  -- "$base" --bogus
+# nonsense that passes key-by-key validation but cannot be run (issue 10, item 5); before, each ran:
+# a diameter in the wrong unit did "0 steps" with exit 0 and a DONE, an end time below one step completed
+# 0 steps, a DEM step above the fluid's Courant step failed after the run started (or ran away)
+demo=$source_dir/data/scenes/sedimentation_demo.toml
+expect_bad diameter-in-wrong-unit "particles.diameter = 75 (from --set)" "Re_p" "in metres" -- "$base" --set particles.diameter=75
+expect_bad no-step               "run.end_time = 1e-09 (from --set)" "shorter than one DEM step" -- "$base" --set run.end_time=1e-9
+expect_bad dem-step-above-fluid-step "dt_DEM" "longer than the fluid step" "contact.t_star"  -- "$demo" --set fluid.courant=0.05 --set contact.gamma_star=0.1
 
 # --help and --version: status 0, text on stdout, nothing written
 for flag in --help --version; do

@@ -12,7 +12,7 @@
 # differ by at most one DEM step, and ends with a fluid state comparable to a run of whole full steps
 # (max |u| within 2x, pressure span within 3x).
 source "$(dirname "$0")/lib_stability.sh"
-common=(--set particles.solids_fraction=0.3 --set 'fluid.cells=[4,8,4]' --set fluid.courant=1.0
+common=(--set particles.solids_fraction=0.3 --set 'fluid.cells=[4,8,4]' --set fluid.courant=0.5
         --set contact.gamma_star=3e-4 --set particles.velocity_rms=1.0 --set run.dump_interval=0)
 dt=2.1489886990891763e-07      # dt_DEM of gamma* = 3e-4; the fluid step from rest is 2,016 DEM steps
 run_ok short "${common[@]}" --set run.end_time=$("$PY" -c "print((2016 * 5 + 1) * $dt)")

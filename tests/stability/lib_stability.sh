@@ -82,7 +82,8 @@ run_ok() {
 cat >"$tmp/check.py" <<'PYEOF'
 """Checks of a completed coupled run (tests/stability): prints the figures, exits 1 on a failure.
 
-* the run completed (DONE) its fixed number of steps: the last series row is step round(end_time/dt_DEM);
+* the run completed (DONE) its fixed number of steps: the last series row is step round(end_time/dt_DEM)
+  (k round(dump_interval/dt_DEM) when end_time is k dump intervals, sim/run.cpp coupled_end_step);
 * no NaN/Inf in any series column or in any snapshot array (particles, fluid);
 * bounded kinetic energy. The only energy source of the periodic sedimenting box is the driving
   (gravity less the removed mean pressure gradient rho_mix g). With zero total momentum its power is
@@ -121,6 +122,12 @@ def main():
     step = s["step"][:]
     t = s["time"][:]
     steps = int(round(p["end_time_s"] / p["dt_dem_s"]))
+    # a coupled run whose end is a whole number k of snapshot intervals ends on the k-th snapshot step
+    # (sim/run.cpp coupled_end_step)
+    if p["dump_interval_s"] > 0:
+        k = round(p["end_time_s"] / p["dump_interval_s"])
+        if k >= 1 and abs(p["end_time_s"] / p["dump_interval_s"] - k) < 1e-6 * k:
+            steps = int(k) * max(1, int(round(p["dump_interval_s"] / p["dt_dem_s"])))
     need(int(step[-1]) == steps, f"last series row at step {int(step[-1])}, expected {steps}")
     u_t = float(p["u_t_m_s"])
     V = float(np.prod(p["box_size_m"]))

@@ -268,12 +268,10 @@ TEST(FluidViscousFlux, MomentumBalanceClosesWithVariableVoidFraction) {
 // test (2)). A test of the domain slip to 1 % needs the bias below 1 %, i.e. cells of >= 30 d_p: it runs
 // at 40 d_p (bias 0.6 %, 4 cells in a 160 d_p box).
 //
-// One-way coupling (no drag on the fluid): the fluid only feels the periodic driving eps (rho_f - rho_mix)
-// g, which with no reaction accelerates it uniformly upward at (rho_mix/rho_f - 1) g; in that frame the
-// particle's buoyant weight is multiplied by rho_mix/rho_f = 1 + phi (rho_p - rho_f)/rho_f, i.e. 3.5e-4 in
-// a 120 d_p box (slip +3e-4). The drag law also sees the particle's own deposit phi_p = (V_p/V_cell)
-// sum_c w_c^2 ~ 1e-4 at 10 d_p cells (hindrance eps^-2.65: slip -2.5e-4). Both are below 1e-3, the
-// tolerance; measured slip/u_t - 1 = +6e-5.
+// One-way coupling (no drag on the fluid): the driving is hydrostatic (sim/run.hpp periodic_driving), so
+// the fluid stays at rest and the particle's buoyant weight is exactly (rho_p - rho_f) V_p g. The drag law
+// sees the particle's own deposit phi_p = (V_p/V_cell) sum_c w_c^2 ~ 1e-4 at 10 d_p cells (hindrance
+// eps^-2.65: slip -2.5e-4), below 1e-3, the tolerance.
 struct SettlingResult {
   double domain_slip_over_ut = 0.0;  // time-averaged from t0
   double local_slip_over_ut = 0.0;   // u_p - v at the final snapshot
@@ -335,6 +333,103 @@ TEST(Coupled, SingleParticleReachesTerminalVelocity) {
   EXPECT_NEAR(fine.local_slip_over_ut, 1.0, 5e-3);
   EXPECT_GT(fine.domain_slip_over_ut, 1.05);
   EXPECT_LT(fine.domain_slip_over_ut, 1.15);
+}
+
+// ---- (1b) one-way suspension and the pressure-gradient force in coupled runs ------------------------------
+// One-way coupling (sim/run.hpp periodic_driving, coupler.hpp): the particles do not act on the fluid (no
+// drag on it, eps = 1 in its equations) and the fluid carries no particle weight (hydrostatic driving,
+// G = rho_f g), so a fluid at rest stays at rest, exactly; each particle sees the fluid's buoyancy and
+// settles at its single-particle drag balance
+//     beta_p w = (rho_p - rho_f) g        (pressure_gradient_force = true)
+//     beta_p w = rho_p g                  (pressure_gradient_force = false: no buoyancy either),
+// exactly what a quiescent fluid gives (sim/run.cpp dem_settings_from_scene). Before the fix the driving
+// used rho_mix whatever the coupling: at <phi> = 0.05 the fluid got eps (rho_f - rho_mix) g = -565 m/s^2
+// with nothing to balance it (measured with this scene: 10.9 m/s upward after 19 ms, then the run failed
+// on the Courant limit), and the particles (rho_p - rho_mix) V_p g, 5 % short. (With the right driving but
+// eps in the fluid's equations, the fluid had to get out of the particles' way without being pushed: a
+// displacement flow that grew, doubling every ~40 ms, to 0.025 m/s by 0.3 s and pulled the slip 1.6 % off.)
+//
+// Stokes drag (beta_p independent of phi and slip) makes the balance one number, u_St = weight d^2/(18 mu):
+// every particle relaxes to it in tau_p = 26 ms; after 0.3 s (11.5 tau_p, e^-11.5 = 1e-5) the mean slip
+// <u_p - v>_y of the one-way run and the quiescent run's -<v>_y must equal u_St. Tolerance 2e-4 relative
+// (measured 1e-5: the transient); it is below rho_f/rho_p = 8.7e-4, so the test tells buoyancy on from off.
+// Beetstra (the scenes' law) at <phi> = 0.05: each particle's balance is beta_p(phi_p, w) w = weight at its
+// own phi_p; the phi_p-dependence (hindrance) lets concentration waves grow, and the particles' mean
+// acceleration rho_p d<v>/dt moves <beta_p (u_p - v)> off the weight (measured 0.997-1.013 over 0.075-0.2 s):
+// tolerance 3 % at 0.1 s. The fluid velocity must stay 0 there (bound 1e-3 u_t; before the fix: 10.9 m/s).
+TEST(Coupled, OneWaySuspensionSettlesAtSingleParticleBalance) {
+  const double u_stokes_no_buoyancy = 1500.0 * 9.81 * 75e-6 * 75e-6 / (18.0 * 1.8e-5);
+  for (const bool pressure_force : {true, false}) {
+    const std::string pgf = std::string("fluid.pressure_gradient_force=") + (pressure_force ? "true" : "false");
+    const double u_st = u_stokes_no_buoyancy * (pressure_force ? 1.0 - 1.3 / 1500.0 : 1.0);
+    double slip[2] = {0.0, 0.0};  // quiescent, one-way
+    for (int k = 0; k < 2; ++k) {
+      const cgd::Scene scene =
+          make_scene({"particles.solids_fraction=0.05", std::string("fluid.coupling=") + (k ? "\"one-way\"" : "\"quiescent\""),
+                      "fluid.drag=\"stokes\"", pgf, "run.end_time=0.3"});
+      TempDir dir;
+      const fs::path run = run_quietly(scene, dir);
+      cgd::h5::File snap = cgd::h5::File::open_read(last_snapshot(run).string(), MPI_COMM_SELF);
+      const auto v = snap.read_double("/particles/velocity");
+      const auto u = k ? snap.read_double("/particles/fluid_velocity") : std::vector<double>(v.size(), 0.0);
+      for (std::size_t i = 1; i < v.size(); i += 3) slip[k] += u[i] - v[i];
+      slip[k] /= static_cast<double>(v.size() / 3);
+    }
+    std::printf(
+        "[ one-way vs quiescent, Stokes drag ] phi 0.05, pressure-gradient force %s: mean slip quiescent %.7f, "
+        "one-way %.7f m/s, balance %.7f m/s (rel. dev. %+.2e, %+.2e)\n",
+        pressure_force ? "on" : "off", slip[0], slip[1], u_st, slip[0] / u_st - 1.0, slip[1] / u_st - 1.0);
+    EXPECT_NEAR(slip[0] / u_st, 1.0, 2e-4) << pgf;
+    EXPECT_NEAR(slip[1] / u_st, 1.0, 2e-4) << pgf;
+  }
+
+  const cgd::Scene scene = make_scene({"particles.solids_fraction=0.05", "fluid.coupling=\"one-way\"",
+                                       "run.end_time=0.1", "run.dump_interval=0.05"});
+  const double u_t = scene.derived.u_t_m_s, weight = (1500.0 - 1.3) * 9.81;  // N/m^3 of particle
+  TempDir dir;
+  const fs::path run = run_quietly(scene, dir);
+  cgd::h5::File snap = cgd::h5::File::open_read(last_snapshot(run).string(), MPI_COMM_SELF);
+  const auto v = snap.read_double("/particles/velocity");
+  const auto u = snap.read_double("/particles/fluid_velocity");
+  const auto beta = snap.read_double("/particles/drag_coefficient");
+  const auto uf = snap.read_double("/fluid/velocity");
+  double drag = 0.0, uf_max = 0.0;
+  for (std::size_t i = 0; i < beta.size(); ++i) drag += beta[i] * (u[3 * i + 1] - v[3 * i + 1]);
+  drag /= static_cast<double>(beta.size());
+  for (double x : uf) uf_max = std::max(uf_max, std::abs(x));
+  const auto series = read_series(run);
+  double mean_u_max = 0.0;
+  for (double x : series.column("fluid_velocity_mean")) mean_u_max = std::max(mean_u_max, std::abs(x));
+  std::printf(
+      "[ one-way suspension, Beetstra ] phi 0.05, %lld particles, t = 0.1 s: <beta (u_p - v)_y> / weight %.4f; "
+      "fluid max |u| %.3g m/s (%.3g u_t), max |<u>| %.3g m/s\n",
+      static_cast<long long>(scene.derived.particle_count), drag / weight, uf_max, uf_max / u_t, mean_u_max);
+  EXPECT_NEAR(drag / weight, 1.0, 0.03);
+  EXPECT_LT(uf_max, 1e-3 * u_t);
+  EXPECT_LT(mean_u_max, 1e-3 * u_t);
+}
+
+// Two-way coupling without the pressure-gradient force: the particles feel no pressure at all, neither
+// its periodic part nor the mean gradient that carries the mixture weight (sim/run.hpp: G = rho_mix g/<eps>
+// over the fluid alone), so a homogeneous suspension's particle balance is <beta_p (u_p - v)> = rho_p g,
+// not the eps (rho_p - rho_f) g of test (2). Before the fix the particles still got -V_p rho_mix g:
+// <beta_p (u_p - v)> = (rho_p - rho_mix) g, 10 % short at <phi> = 0.1. Measured from the final snapshot at
+// 25 ms (the slip settles within ~2 ms, test (2)); tolerance 2 %: the mean particle acceleration left from
+// the transient and the structure growing from the random placement (test (2) sees 1 % in its slip).
+TEST(Coupled, NoPressureGradientForceMeansNoBuoyancy) {
+  const cgd::Scene scene = make_scene({"particles.solids_fraction=0.1", "fluid.pressure_gradient_force=false"});
+  TempDir dir;
+  const fs::path run = run_quietly(scene, dir);
+  cgd::h5::File snap = cgd::h5::File::open_read(last_snapshot(run).string(), MPI_COMM_SELF);
+  const auto v = snap.read_double("/particles/velocity");
+  const auto u = snap.read_double("/particles/fluid_velocity");
+  const auto beta = snap.read_double("/particles/drag_coefficient");
+  double drag = 0.0;
+  for (std::size_t i = 0; i < beta.size(); ++i) drag += beta[i] * (u[3 * i + 1] - v[3 * i + 1]);
+  drag /= static_cast<double>(beta.size());
+  std::printf("[ two-way, no pressure-gradient force ] phi 0.1: <beta (u_p - v)_y> / (rho_p g) %.4f\n",
+              drag / (1500.0 * 9.81));
+  EXPECT_NEAR(drag / (1500.0 * 9.81), 1.0, 0.02);
 }
 
 // ---- (2) homogeneous suspension: the drag balance ---------------------------------------------------
