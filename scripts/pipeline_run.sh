@@ -4,7 +4,8 @@
 #   PARAMS: the text that defines the run (scene, --set overrides); kept in RUN_DIR.params.
 # If RUN_DIR holds an unfinished run of the same PARAMS with a checkpoint (a killed or failed make), it is
 # continued with --restart: nothing already computed is lost. Otherwise (new parameters, or no checkpoint)
-# RUN_DIR is removed and the run starts afresh. One progress line at the start and one at the end.
+# RUN_DIR is removed and the run starts afresh. One progress line at the start, one a minute with the
+# simulated time reached and an ETA (from the run's series.h5), and one at the end.
 set -uo pipefail
 label=$1 dir=$2 params=$3
 shift 3
@@ -22,7 +23,30 @@ else
 fi
 mkdir -p "$(dirname "$dir")"
 printf '%s\n' "$params" >"$dir.params"
-"$@" -o "$dir" "${restart[@]}" --quiet >"$dir.log" 2>&1
+"$@" -o "$dir" "${restart[@]}" --quiet >"$dir.log" 2>&1 &
+pid=$!
+progress() {  # simulated time reached, of the end time, and an ETA from the series (written at each snapshot)
+  /usr/bin/python3 - "$dir/series.h5" 2>/dev/null <<'PY'
+import sys, h5py
+with h5py.File(sys.argv[1], "r") as f:
+    t, w = f["time"][-1], f["wall_seconds"][-1]
+    p = f["params"].attrs
+    end, tref = p["end_time_s"], p.get("t_ref_s", 0)
+    frac = t / end if end > 0 else 0
+    eta = w * (1 - frac) / frac if frac > 0 else float("nan")
+    unit = f"{t / tref:.1f} of {end / tref:.0f} t_ref" if tref > 0 else f"{t:.3g} of {end:.3g} s"
+    print(f"{unit}, ETA {eta:.0f} s")
+PY
+}
+last=$(date +%s)
+while kill -0 "$pid" 2>/dev/null; do
+  sleep 2
+  if [ $(( $(date +%s) - last )) -ge 60 ]; then
+    last=$(date +%s)
+    line=$(progress) && [ -n "$line" ] && say "$line"
+  fi
+done
+wait "$pid"
 status=$?
 if [ $status -ne 0 ] || [ ! -f "$dir/DONE" ]; then
   say "FAILED (exit status $status); its log: $dir.log"

@@ -192,7 +192,9 @@ class RunDriver {
     dump_every_ = scene_.run.dump_interval_s > 0 ? std::max<std::int64_t>(1, std::llround(scene_.run.dump_interval_s / dt_)) : 0;
     series_every_ = scene_.run.series_interval_s > 0
                         ? std::max<std::int64_t>(1, std::llround(scene_.run.series_interval_s / dt_))
-                        : std::max<std::int64_t>(1, end_step_ / 1000);
+                        // default: about 1000 rows, and at least 100 DEM steps apart, so that the diagnostics
+                        // (O(N) and a reduction, about one DEM step's work) cost under ~1 % of a run
+                        : std::max<std::int64_t>(100, end_step_ / 1000);
     t_output_ = run_timers_.add("output");
     t_checkpoint_ = run_timers_.add("checkpoint");
     t_diag_ = run_timers_.add("diagnostics");
