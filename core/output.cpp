@@ -90,6 +90,10 @@ void write_params(h5::File& f, const Scene& s) {
     f.set_attr(g, "drag", std::string(to_string(fl.drag)));
     f.set_attr(g, "pressure_gradient_force", flag(fl.pressure_gradient_force));
     f.set_attr(g, "parcel_correction", flag(fl.parcel_correction));
+    if (!fl.drag_model_path.empty()) {  // drag = "model": the file and its checksum (provenance)
+      f.set_attr(g, "drag_model", fl.drag_model_path);
+      f.set_attr(g, "drag_model_checksum", fl.drag_model_checksum);
+    }
   }
 
   // [run]
