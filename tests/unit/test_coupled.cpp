@@ -613,3 +613,84 @@ TEST(Coupled, MixtureMomentumConserved) {
 }
 
 }  // namespace
+
+// ---- (6) parcels (models.md "Parcels"; docs/coarse.md) ---------------------------------------------------
+namespace {
+
+// A lone parcel of size alpha: drag alpha^3 V_p beta_p(phi, w) w with beta_p evaluated with the primary
+// diameter, weight alpha^3 V_p (rho_p - rho_f) g: both scale with alpha^3, so it settles at the primary's
+// u_t -- up to its own volume, which the drag law sees as a local solids fraction (the void fraction is
+// deposited with alpha^3 V_p): phi_self = alpha^3 V_p / V_cell x sum_c w_c^2 <= alpha^3 V_p / V_cell x
+// 0.594^3 (TSC, at a cell centre), and Wen-Yu's eps^-2.65 lowers the slip by at most ~2.65 phi_self (at
+// 10 d_p cells and alpha = 6 that is 4.4 %: measured 4.4 %). One-way coupling on 30 d_p cells (4 across
+// the 120 d_p box), averaged over 10-15 t_ref as the single-particle test: tolerance 1e-3 (as there) plus
+// 2.65 phi_self,max (0.04 % at alpha = 3, 0.2 % at alpha = 6).
+TEST(Parcels, LoneParcelSettlesAtThePrimaryTerminalVelocity) {
+  for (double alpha : {3.0, 6.0}) {
+    const double box = 120, cell = 30;
+    const double phi = std::pow(alpha, 3) * kPi / 6.0 / (box * box * box);  // one parcel
+    const double t_ref = make_scene({}).derived.t_ref_s;
+    const cgd::Scene scene = make_scene({"domain.size_dp=[120, 120, 120]", "particles.solids_fraction=" + num(phi),
+                                         "particles.parcel_size=" + num(alpha), "fluid.dx_over_dp=" + num(cell),
+                                         "fluid.coupling=\"one-way\"", "fluid.drag=\"wen-yu\"",
+                                         // the primary's soft contacts, scaled so that the parcel's t_c
+                                         // (hence dt_DEM) is the primary's: k alpha / (m alpha^3) fixed
+                                         "contact.stiffness=" + num(8e-6 * alpha * alpha),
+                                         "run.end_time=" + num(15 * t_ref)});
+    ASSERT_EQ(scene.derived.particle_count, 1);
+    TempDir dir;
+    const fs::path run = run_quietly(scene, dir);
+    const double slip = time_average(read_series(run), "slip_velocity", 3, 1, 10 * t_ref) / scene.derived.u_t_m_s;
+    const double phi_self_max = std::pow(alpha, 3) * kPi / 6.0 / (cell * cell * cell) * std::pow(0.59375, 3);
+    std::printf("[ lone parcel ] alpha %.0f: slip/u_t %.6f (own-volume bound %.4f)\n", alpha, slip, 2.65 * phi_self_max);
+    EXPECT_NEAR(slip, 1.0, 1e-3 + 2.65 * phi_self_max) << "alpha " << alpha;
+  }
+}
+
+// A homogeneous suspension of parcels: per primary volume the balance is the primaries' (models.md),
+// beta_p(phi, w) w = eps (rho_p - rho_f) g, so the slip is the drag-law balance at <phi> whatever alpha.
+// The same setting and tolerance (2 %) as HomogeneousSuspensionMatchesDragBalance, alpha = 2 in a
+// 30 d_p box on 5 d_p cells (6 x 6 x 6, 645 parcels at phi = 0.1: ~3 parcels per cell, so the void
+// fraction's parcel noise stays near the primaries' on 3.33 d_p cells).
+TEST(Parcels, HomogeneousParcelSuspensionMatchesDragBalance) {
+  const cgd::Scene scene = make_scene({"domain.size_dp=[30, 30, 30]", "particles.parcel_size=2", "fluid.dx_over_dp=5",
+                                       "particles.solids_fraction=0.1", "run.end_time=0.025"});
+  const double u_t = scene.derived.u_t_m_s;
+  const double phi = static_cast<double>(scene.derived.particle_count) * 8.0 * scene.derived.particle_volume_m3 /
+                     (scene.domain.size_m[0] * scene.domain.size_m[1] * scene.domain.size_m[2]);
+  const double expected = cgd::homogeneous_slip_over_ut(cgd::DragLaw::Beetstra, {1.3, 1.8e-5, 75e-6}, phi, 1500.0, 9.81, u_t);
+  TempDir dir;
+  const fs::path run = run_quietly(scene, dir);
+  const double slip = time_average(read_series(run), "slip_velocity", 3, 1, 0.005) / u_t;
+  std::printf("[ parcel suspension ] alpha 2, phi %.3f (%lld parcels): slip/u_t %.4f, balance %.4f (%+.2f %%)\n", phi,
+              static_cast<long long>(scene.derived.particle_count), slip, expected, 100 * (slip / expected - 1));
+  EXPECT_NEAR(slip / expected, 1.0, 0.02);
+}
+
+// Parcel contacts (models.md "Parcels"): k_n,parcel = alpha k_n with the parcel mass alpha^3 m, gamma_n
+// from the same restitution, so for any alpha
+//   e = exp(-beta pi / omega) is the scene's restitution,       beta = gamma_n/(2 m_eff), omega the damped frequency;
+//   t_c / (d / v) and the relative overlap v / (omega d) are alpha-independent (t_c, d both ~ alpha).
+// Computed here from the scene's derived k_n, gamma_n, t_c independently of core/scales.hpp; the DEM
+// realises a contact of given (k_n, gamma_n, m) to 0.5 % (DemBinaryCollision.HeadOnRestitutionAndContactTime).
+TEST(Parcels, ContactScalingKeepsRestitutionRelativeContactTimeAndOverlap) {
+  const cgd::Scene one = make_scene({"domain.size_dp=[40, 40, 40]"});
+  for (double alpha : {2.0, 4.0, 8.0}) {
+    const cgd::Scene s = make_scene({"domain.size_dp=[40, 40, 40]", "particles.parcel_size=" + num(alpha)});
+    const auto& x = s.derived;
+    const double m_eff = 0.5 * x.parcel_mass_kg;
+    const double beta = x.gamma_n_kg_s / (2 * m_eff), omega = std::sqrt(x.k_n_N_m / m_eff - beta * beta);
+    EXPECT_NEAR(std::exp(-beta * kPi / omega), 0.9, 1e-12) << "alpha " << alpha;
+    EXPECT_NEAR(kPi / omega, x.t_c_s, 1e-12 * x.t_c_s);
+    EXPECT_NEAR(x.k_n_N_m / one.derived.k_n_N_m, alpha, 1e-12 * alpha);
+    EXPECT_NEAR(x.gamma_n_kg_s / one.derived.gamma_n_kg_s, alpha * alpha, 1e-10 * alpha * alpha);
+    const double v = 0.1;  // impact speed, m/s
+    EXPECT_NEAR(x.t_c_s / (x.parcel_diameter_m / v), one.derived.t_c_s / (one.derived.parcel_diameter_m / v), 1e-12);
+    const double omega1 = std::sqrt(one.derived.k_n_N_m / (0.5 * one.derived.parcel_mass_kg));
+    const double omega_undamped = std::sqrt(x.k_n_N_m / m_eff);
+    EXPECT_NEAR(v / (omega_undamped * x.parcel_diameter_m), v / (omega1 * one.derived.parcel_diameter_m), 1e-14);
+    EXPECT_NEAR(x.dt_dem_s / one.derived.dt_dem_s, alpha, 1e-12 * alpha);
+  }
+}
+
+}  // namespace
