@@ -66,7 +66,8 @@ SlipSummary summarise_run(const std::string& run_dir, double u_t, double start, 
   s.run_dir = run_dir;
   s.u_t_m_s = u_t;
   try {
-    s.slip = window_average(t, slip, start, 1e300, batches);
+    const double end = t.empty() ? start : t.back() * (1 + 1e-12) + 1e-300;  // the whole run after the start
+    s.slip = window_average(t, slip, start, end, batches);
   } catch (const std::invalid_argument& e) {
     throw InputError(path + ": cannot average the slip: " + e.what());
   }

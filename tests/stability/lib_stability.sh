@@ -115,7 +115,7 @@ def main():
     need(os.path.exists(os.path.join(run, "DONE")), "no DONE marker: the run did not complete")
     s = h5py.File(os.path.join(run, "series.h5"), "r")
     p = s["params"].attrs
-    floor = 0.3
+    floor = float(p["void_fraction_floor"]) if "void_fraction_floor" in p else 0.3  # [numerics]
     for k in s.keys():
         if isinstance(s[k], h5py.Dataset):
             need(np.all(np.isfinite(s[k][:])), f"series column {k} has non-finite values")
@@ -170,7 +170,8 @@ def main():
                  f"{os.path.basename(f)}: fluid fields not finite")
             need(eps.min() >= floor - 1e-12 and eps.max() <= 1 + 1e-12,
                  f"{os.path.basename(f)}: void fraction in [{eps.min():.6g}, {eps.max():.6g}], outside [{floor}, 1]")
-            phi_mean = float(h["params"].attrs["particle_count"]) * float(h["params"].attrs["particle_volume_m3"]) / V
+            # parcels: alpha^3 primaries each
+            phi_mean = float(h["params"].attrs["particle_count"]) * float(h["params"].attrs["particle_volume_m3"]) * float(h["params"].attrs["parcel_size"]) ** 3 / V
             need(abs(eps.mean() - (1 - phi_mean)) < 1e-9, f"{os.path.basename(f)}: mean void fraction {eps.mean():.12g} != 1 - <phi> = {1 - phi_mean:.12g}")
             eps_min, eps_max = min(eps_min, eps.min()), max(eps_max, eps.max())
             at_floor += int(np.sum(eps <= floor + 1e-12))
