@@ -2,7 +2,7 @@
 # The main job of cgd, on a fresh Debian machine: install and build (scripts/setup.sh), then run the
 # whole pipeline on the demo profile (Makefile.pipeline PROFILE=demo, 2 jobs at a time): three small
 # resolved runs, the filter, the fit, the coarse runs with and without the model, the parcel fit and the
-# accuracy-versus-cost study, ending with the summary. About 15 minutes on 2 idle cores.
+# accuracy-versus-cost study, ending with the summary. About 13 minutes on 2 idle cores (measured).
 # Make runs only what is out of date: run it again and it prints the summary at once; an interrupted run
 # continues where it stopped (resolved runs from their checkpoints).
 # usage: scripts/run_demo.sh [MAKE VARIABLES...]    e.g. scripts/run_demo.sh PHIS=0.05 (see: make -f Makefile.pipeline help)
