@@ -12,6 +12,12 @@
 
 namespace cgd {
 
+std::optional<DragLaw> microscopic_drag_law(std::string_view name) {
+  for (DragLaw law : {DragLaw::Stokes, DragLaw::WenYu, DragLaw::Beetstra})
+    if (name == to_string(law)) return law;
+  return std::nullopt;
+}
+
 void throw_drag_law_needs_model(DragLaw law) {
   throw InputError(std::string("drag law \"") + to_string(law) +
                    "\" needs a filtered model file; only \"stokes\", \"wen-yu\" and \"beetstra\" are "

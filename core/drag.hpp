@@ -11,6 +11,8 @@
 // inline. For parcels, beta_p is evaluated with the primary diameter (models.md, "Parcels").
 #include <cmath>
 #include <functional>
+#include <optional>
+#include <string_view>
 
 #include "core/scene.hpp"
 
@@ -140,6 +142,10 @@ struct BeetstraDrag {
   double stokes_beta_;  // 18 mu_f / d^2, kg m^-3 s^-1
   double re_per_slip_;  // rho_f d / mu_f, s/m
 };
+
+/// The microscopic law of a name as files and scenes spell it (to_string: "stokes", "wen-yu", "beetstra");
+/// nullopt for any other name, the filtered laws ("radl2014", "model") included.
+std::optional<DragLaw> microscopic_drag_law(std::string_view name);
 
 /// Throws InputError: `law` (Radl2014, Model) is a filtered model, which needs a model file and
 /// cannot be built from DragParams alone.

@@ -194,12 +194,8 @@ DragModel load_drag_model(const std::string& path) {
         "particle_density_kg_m3", "fluid_density_kg_m3", "fluid_viscosity_Pa_s", "gravity_m_s2"})
     need(key);
   const std::string base = f.attr_string("/", "base_drag");
-  if (base == "beetstra")
-    m.base_law = DragLaw::Beetstra;
-  else if (base == "wen-yu")
-    m.base_law = DragLaw::WenYu;
-  else if (base == "stokes")
-    m.base_law = DragLaw::Stokes;
+  if (const auto law = microscopic_drag_law(base))
+    m.base_law = *law;
   else
     throw InputError(
         path + ": base_drag = \"" + base +

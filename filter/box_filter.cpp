@@ -58,49 +58,6 @@ SummedVolumeTable<K>::SummedVolumeTable(const PeriodicGrid& grid, const double* 
         for (int q = 0; q < K; ++q) table_[at(i, j, k) + q] += table_[at(i, j, k - 1) + q];
 }
 
-template <int K>
-template <class Wx, class Wy, class Wz>
-std::array<double, K> SummedVolumeTable<K>::combine(const std::array<AxisOperator, 3>& op, const Wx& wx,
-                                                    const Wy& wy, const Wz& wz) const {
-  const int ix[4] = {op[0].lo, op[0].lo + 1, op[0].hi, op[0].hi + 1};
-  const int iy[4] = {op[1].lo, op[1].lo + 1, op[1].hi, op[1].hi + 1};
-  const int iz[4] = {op[2].lo, op[2].lo + 1, op[2].hi, op[2].hi + 1};
-  std::array<double, K> sum{};
-  for (int r = 0; r < 4; ++r) {
-    if (wz[r] == 0.0) continue;
-    for (int q = 0; q < 4; ++q) {
-      const double wyz = wy[q] * wz[r];
-      if (wyz == 0.0) continue;
-      const double* row = &table_[at(0, iy[q], iz[r])];
-      for (int p = 0; p < 4; ++p) {
-        const double w = wx[p] * wyz;
-        const double* t = row + static_cast<std::size_t>(ix[p]) * K;
-        for (int c = 0; c < K; ++c) sum[c] += w * t[c];
-      }
-    }
-  }
-  return sum;
-}
-
-template <int K>
-std::array<double, K> SummedVolumeTable<K>::integral(const std::array<AxisOperator, 3>& op) const {
-  std::array<double, K> sum = combine(op, op[0].value, op[1].value, op[2].value);
-  // the removed mean, integrated over the box exactly: mean x box volume in cells
-  const double volume = (op[0].hi - op[0].lo + op[0].value[1] + op[0].value[3]) *
-                        (op[1].hi - op[1].lo + op[1].value[1] + op[1].value[3]) *
-                        (op[2].hi - op[2].lo + op[2].value[1] + op[2].value[3]);
-  for (int c = 0; c < K; ++c) sum[c] += mean_[c] * volume;
-  return sum;
-}
-
-template <int K>
-std::array<double, K> SummedVolumeTable<K>::integral_slope(const std::array<AxisOperator, 3>& op, int axis) const {
-  return combine(op, axis == 0 ? op[0].slope : op[0].value, axis == 1 ? op[1].slope : op[1].value,
-                 axis == 2 ? op[2].slope : op[2].value);
-}
-
-template class SummedVolumeTable<1>;
-template class SummedVolumeTable<4>;
 template class SummedVolumeTable<5>;
 
 namespace {

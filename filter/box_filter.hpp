@@ -44,13 +44,11 @@ class SummedVolumeTable {
   /// (in cells along each axis) that will be asked for.
   SummedVolumeTable(const PeriodicGrid& grid, const double* fields, std::array<double, 3> max_width_cells);
 
-  /// Box integral in cell units (sum of f times the overlapped fraction of each cell) of each field.
-  std::array<double, K> integral(const std::array<AxisOperator, 3>& op) const;
-  /// Derivative of the box integral with respect to the box centre along `axis` (cell units).
-  std::array<double, K> integral_slope(const std::array<AxisOperator, 3>& op, int axis) const;
   /// Mean of each field over the grid.
   const std::array<double, K>& mean() const { return mean_; }
-  /// The K values at table point (i, j, k) (the cumulative integral minus the means' part).
+  /// The K values at table point (i, j, k) (the cumulative integral minus the means' part): a box
+  /// integral is the sum over the 4 x 4 x 4 points of an AxisOperator's indices of the weights' product
+  /// times these values, plus mean x box volume (PeriodicBoxFilter::at).
   const double* point(int i, int j, int k) const { return &table_[at(i, j, k)]; }
   std::size_t bytes() const { return table_.size() * sizeof(double); }
 
@@ -62,8 +60,6 @@ class SummedVolumeTable {
     return ((static_cast<std::size_t>(k) * static_cast<std::size_t>(m_[1]) + static_cast<std::size_t>(j)) *
                 static_cast<std::size_t>(m_[0]) + static_cast<std::size_t>(i)) * K;
   }
-  template <class Wx, class Wy, class Wz>
-  std::array<double, K> combine(const std::array<AxisOperator, 3>& op, const Wx& wx, const Wy& wy, const Wz& wz) const;
 };
 
 /// The box operator of one axis for a box of `width_cells` centred at the wrapped coordinate `s`

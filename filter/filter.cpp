@@ -1,36 +1,22 @@
 #include "filter/filter.hpp"
 
-#include <unistd.h>
-
 #include <algorithm>
-#include <chrono>
 #include <cmath>
-#include <cstring>
 #include <filesystem>
-#include <iostream>
-#include <map>
-#include <numeric>
 #include <queue>
-#include <random>
 #include <sstream>
 
 #include "core/drag.hpp"
 #include "core/error.hpp"
-#include "core/h5.hpp"
-#include "core/output.hpp"
 #include "core/scene.hpp"
+#include "core/timers.hpp"
 #include "filter/box_filter.hpp"
-#include "filter/statistics.hpp"
 
 namespace cgd::filter {
 
 namespace fs = std::filesystem;
 
 namespace {
-
-double now_s() {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
-}
 
 std::string fmt(double v) {
   std::ostringstream o;
@@ -41,9 +27,7 @@ std::string fmt(double v) {
 
 DragLaw micro_law(const RunPlan& run) {
   const std::string& d = run.physics.drag;
-  if (d == "beetstra") return DragLaw::Beetstra;
-  if (d == "wen-yu") return DragLaw::WenYu;
-  if (d == "stokes") return DragLaw::Stokes;
+  if (const auto law = microscopic_drag_law(d)) return *law;
   throw InputError(run.path + ": the run's drag law is '" + d +
                    "'; the filter normalises by a microscopic law (beetstra, wen-yu, stokes): a resolved run uses one");
 }
@@ -58,7 +42,8 @@ std::uint64_t mix(std::uint64_t x) {
   return x ^ (x >> 31);
 }
 
-/// The physics that pooled runs must share: name, value in the run, relative tolerance.
+/// The physics that pooled runs must share: each key's name and its value as text (6 significant
+/// digits), compared exactly.
 std::vector<std::pair<std::string, std::string>> physics_keys(const RunPlan& r) {
   const RunPhysics& p = r.physics;
   return {{"particles.diameter (m)", fmt(p.diameter_m)},
@@ -186,7 +171,7 @@ SnapshotResult filter_snapshot(const Snapshot& s, const FilterPlan& plan, const 
   if (s.drag_coefficient.empty() || !s.has_fluid)
     throw InputError(s.path + ": the snapshot lacks the coupling fields (/particles/drag_coefficient, /fluid); "
                               "the filter needs a coupled run's snapshot");
-  const double t0 = now_s();
+  const double t0 = wall_seconds();
   const std::size_t n_widths = plan.widths_m.size() + 1;  // + whole box
   const std::size_t n_bins = plan.bin_edges.size() - 1;
   const double bin_width = plan.bin_edges[1] - plan.bin_edges[0];
@@ -265,7 +250,7 @@ SnapshotResult filter_snapshot(const Snapshot& s, const FilterPlan& plan, const 
       out.samples[w].push_back(heaps[w].top());
       heaps[w].pop();
     }
-  out.seconds = now_s() - t0;
+  out.seconds = wall_seconds() - t0;
   return out;
 }
 

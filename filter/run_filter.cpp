@@ -1,7 +1,6 @@
 // run_filter: snapshots distributed over the ranks, per-snapshot sums reduced to rank 0, the block
 // bootstrap and the filtered file (docs/schema-filtered.md) written atomically by rank 0.
 #include <algorithm>
-#include <chrono>
 #include <cmath>
 #include <cstring>
 #include <filesystem>
@@ -12,6 +11,7 @@
 #include "core/checksum.hpp"
 #include "core/error.hpp"
 #include "core/h5.hpp"
+#include "core/timers.hpp"
 #include "core/output.hpp"
 #include "core/scene.hpp"
 #include "filter/filter.hpp"
@@ -22,10 +22,6 @@ namespace cgd::filter {
 namespace fs = std::filesystem;
 
 namespace {
-
-double now_s() {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
-}
 
 constexpr int kSumFields = 5;  // count, numerator, micro, slip, phi
 
@@ -372,7 +368,7 @@ std::size_t run_filter(const FilterOptions& o, MPI_Comm comm) {
   int rank = 0, size = 1;
   MPI_Comm_rank(comm, &rank);
   MPI_Comm_size(comm, &size);
-  const double t_start = now_s();
+  const double t_start = wall_seconds();
   FilterPlan plan;
   on_all_ranks(comm, [&] { plan = plan_filter(o); });
   const std::size_t n_widths = plan.widths_m.size() + 1, n_bins = plan.bin_edges.size() - 1;
@@ -400,13 +396,13 @@ std::size_t run_filter(const FilterOptions& o, MPI_Comm comm) {
     {
       std::size_t done = 0, mine = 0;
       for (std::size_t k = static_cast<std::size_t>(rank); k < rows; k += static_cast<std::size_t>(size)) ++mine;
-      double last_print = now_s();
+      double last_print = wall_seconds();
       for (std::size_t k = static_cast<std::size_t>(rank); k < rows; k += static_cast<std::size_t>(size)) {
         const auto [r, i] = row_of[k];
-        const double t0 = now_s();
+        const double t0 = wall_seconds();
         const Snapshot snap = read_snapshot(plan.runs[r].files[i]);
         checksums[k] = file_checksum_fnv1a(plan.runs[r].files[i]);
-        read_s += now_s() - t0;
+        read_s += wall_seconds() - t0;
         SnapshotResult res = filter_snapshot(snap, plan, o, static_cast<std::int64_t>(k), r);
         filter_s += res.seconds;
         particle_widths += res.particles * static_cast<std::int64_t>(n_widths - 1);
@@ -427,7 +423,7 @@ std::size_t run_filter(const FilterOptions& o, MPI_Comm comm) {
           }
         }
         ++done;
-        const double t = now_s();
+        const double t = wall_seconds();
         if (rank == 0 && !o.quiet && (t - last_print > 2.0 || done == mine)) {
           const double per = (t - t_start) / static_cast<double>(done);
           std::cerr << "cgd-filter: " << done << "/" << mine << " snapshots of rank 0 (" << plan.runs[r].path << ", t = "
@@ -481,15 +477,15 @@ std::size_t run_filter(const FilterOptions& o, MPI_Comm comm) {
   on_all_ranks(comm, [&] {
     if (rank == 0) {
       try {
-        const double t0 = now_s();
+        const double t0 = wall_seconds();
         const Statistics st = compute_statistics(plan, o, sums);
         write_filtered_file(plan, o, sums, out_of_range, samples, st, checksums);
         if (!o.quiet) {
           const RunPhysics& p = plan.runs.front().physics;
-          std::cerr << "cgd-filter: wrote " << o.output_path << " in " << now_s() - t_start << " s (reading "
+          std::cerr << "cgd-filter: wrote " << o.output_path << " in " << wall_seconds() - t_start << " s (reading "
                     << times[0] << " s, filtering " << times[1] << " s = "
                     << (times[1] > 0 ? static_cast<double>(particle_widths) / times[1] : 0.0)
-                    << " particle-widths/s/core, statistics and writing " << now_s() - t0 << " s)\n";
+                    << " particle-widths/s/core, statistics and writing " << wall_seconds() - t0 << " s)\n";
           for (std::size_t r = 0; r < plan.runs.size(); ++r)
             std::cerr << "  run " << plan.runs[r].path << ": " << plan.runs[r].files.size() << " snapshots, tau_int "
                       << st.tau[r] << " snapshots, block length " << st.block_len[r] << ", n_eff " << st.n_eff_run[r]

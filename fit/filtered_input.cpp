@@ -6,6 +6,7 @@
 #include <cstdio>
 
 #include "core/checksum.hpp"
+#include "core/drag.hpp"
 #include "core/error.hpp"
 #include "core/h5.hpp"
 #include "core/output.hpp"
@@ -56,7 +57,7 @@ FilteredFile read_filtered_file(const std::string& path) {
   p.fluid_density_kg_m3 = f.attr_double("/", "fluid_density_kg_m3");
   p.fluid_viscosity_Pa_s = f.attr_double("/", "fluid_viscosity_Pa_s");
   out.scene_toml = f.attr_string("/", "scene");
-  if (p.micro_drag != "beetstra" && p.micro_drag != "wen-yu" && p.micro_drag != "stokes")
+  if (!microscopic_drag_law(p.micro_drag))
     throw InputError(path + ": micro_drag = \"" + p.micro_drag +
                      "\": the runs' law must be a microscopic law (\"beetstra\", \"wen-yu\", \"stokes\")");
   if (!(p.l_char_m > 0)) throw InputError(path + ": l_char_m = " + number(p.l_char_m) + ": must be > 0");

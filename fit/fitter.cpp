@@ -455,9 +455,7 @@ FitResult fit_filtered_drag(const std::vector<FilteredFile>& files, const FitOpt
 
   DragModel& M = R.model;
   const Physics& p = first.physics;
-  M.base_law = p.micro_drag == "wen-yu"   ? DragLaw::WenYu
-               : p.micro_drag == "stokes" ? DragLaw::Stokes
-                                          : DragLaw::Beetstra;
+  M.base_law = microscopic_drag_law(p.micro_drag).value();  // checked when the file was read
   M.u_t_convention = kUtConvention;
   M.u_t_m_s = p.u_t_m_s;
   M.l_char_m = p.l_char_m;

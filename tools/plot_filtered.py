@@ -14,26 +14,22 @@ import h5py
 import numpy as np
 
 HERE = os.path.dirname(os.path.abspath(__file__))
-RADL_CSV = os.path.join(HERE, "..", "data", "reference", "radl2014-filtered-drag.csv")
 
 
-def radl2014(phi, F, csv=RADL_CSV):
-    """Published Radl & Sundaresan (2014) correction H = h(phi) / (1 + a(phi) F), piecewise cubics of
-    data/reference/radl2014-filtered-drag.csv (c1 = -8.82 of MFiX on a(0.25..0.40); see the file)."""
-    rows = [l.strip().split(",") for l in open(csv) if l.strip() and not l.startswith("#")][1:]
-    pieces = {"a": [], "h": []}
-    for r in rows:
-        pieces[r[0]].append([float(x) for x in r[1:]])
-
-    def ev(name, x):
-        for lo, hi, x0, c0, c1, c2, c3 in pieces[name]:
-            if lo <= x < hi:
-                t = x - x0
-                return c0 + c1 * t + c2 * t * t + c3 * t ** 3
-        return 0.0
-
+def radl2014(phi, F):
+    """Published Radl & Sundaresan (2014) correction H = h(phi) / (1 + a(phi) F), with h and a from
+    tools/plot_model.py (the piecewise cubics of data/reference/radl2014-filtered-drag.csv)."""
+    h, a = _radl_curves()
     phi = np.atleast_1d(phi)
-    return np.array([ev("h", p) / (1.0 + ev("a", p) * F) for p in phi])
+    return h(phi) / (1.0 + a(phi) * F)
+
+
+def _radl_curves():
+    if not hasattr(_radl_curves, "cached"):
+        sys.path.insert(0, HERE)
+        from plot_model import radl2014 as curves
+        _radl_curves.cached = curves()
+    return _radl_curves.cached
 
 
 class _NoAxes:
