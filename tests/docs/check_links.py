@@ -33,7 +33,7 @@ def slug(text):
 
 
 def lines_outside_code(path):
-    """(line number, text) of the lines outside fenced code blocks, inline code removed."""
+    """(line number, text, text without inline code) of the lines outside fenced code blocks."""
     inside = False
     with open(path, encoding="utf-8") as fh:
         for number, line in enumerate(fh, 1):
@@ -42,13 +42,13 @@ def lines_outside_code(path):
                 continue
             if inside or line.startswith("    ") and not line.strip().startswith(("-", "*", "|", "[")):
                 continue
-            yield number, re.sub(r"`[^`]*`", "", line)
+            yield number, line, re.sub(r"`[^`]*`", "", line)
 
 
 def anchors(path, cache={}):
     if path not in cache:
         seen, found = {}, set()
-        for _, line in lines_outside_code(path):
+        for _, line, _ in lines_outside_code(path):
             m = HEADING.match(line)
             if not m:
                 continue
@@ -56,7 +56,7 @@ def anchors(path, cache={}):
             n = seen.get(base, 0)
             seen[base] = n + 1
             found.add(base if n == 0 else f"{base}-{n}")
-        for _, line in lines_outside_code(path):  # explicit anchors: <a name="..."> / id="..."
+        for _, line, _ in lines_outside_code(path):  # explicit anchors: <a name="..."> / id="..."
             for a in re.findall(r"<a\s+(?:name|id)=\"([^\"]+)\"", line):
                 found.add(a)
         cache[path] = found
@@ -66,7 +66,7 @@ def anchors(path, cache={}):
 def check_links(root, pages):
     problems = []
     for page in pages:
-        for number, line in lines_outside_code(page):
+        for number, _, line in lines_outside_code(page):
             targets = LINK.findall(line)
             m = REFERENCE.match(line)
             if m:
