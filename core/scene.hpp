@@ -119,13 +119,26 @@ struct Scene {
   bool solves_fluid() const { return fluid && fluid->coupling != Coupling::Quiescent; }
 };
 
+/// What the tool loading a scene accepts beyond the schema: a scene means the same to every tool, but
+/// not every tool runs every scene, and a refusal is made (and the allowed values are offered) while
+/// the scene is read.
+struct ToolAccepts {
+  bool filtered_drag = true;  // fluid.drag = "radl2014" / "model": coarse-grid runs (cgd-coarse)
+};
+/// A resolved run (cgd-generate) uses a microscopic drag law.
+inline constexpr ToolAccepts kResolvedRunAccepts{.filtered_drag = false};
+
 /// Load, apply overrides ("section.key=value"), validate and derive. Throws InputError whose
-/// message names the file, the key, the value given and what is allowed. Writes nothing.
-Scene load_scene(const std::string& path, const std::vector<std::string>& overrides = {});
+/// message names the file, the key, the value given and what is allowed; a scene's structural
+/// problems (unknown, misplaced and mistyped keys, both keys of an alternative) are listed all at once.
+/// An override of a key that has an alternative (run.end_time / run.end_time_tref, fluid.cells /
+/// fluid.dx_over_dp, ...) replaces the alternative the file gives. Writes nothing.
+Scene load_scene(const std::string& path, const std::vector<std::string>& overrides = {},
+                 const ToolAccepts& accepts = {});
 
 /// Same, from TOML text (tests); `origin` stands in for the file name in messages.
 Scene load_scene_from_string(const std::string& toml_text, const std::string& origin,
-                             const std::vector<std::string>& overrides = {});
+                             const std::vector<std::string>& overrides = {}, const ToolAccepts& accepts = {});
 
 /// The keys a restart may change (the run's end, its snapshot, series and checkpoint intervals): every
 /// other key is physics, and a restart that changes it would continue a different simulation.
