@@ -143,7 +143,7 @@ def render(snapshot, out_path, color, slab_dp, slab_center_dp):
     axes_height = 7.0 if aspect >= 2 else 4.5  # inches
     axes_width = min(axes_height / aspect, 6.0)
     # fixed margins in inches (y label, colour bar and its label), so labels never overlap
-    left, bar_gap, bar_width, bar_label, bottom, top = 0.8, 0.12, 0.16, 0.95, 0.6, 0.95
+    left, bar_gap, bar_width, bar_label, bottom, top = 0.8, 0.12, 0.16, 0.95, 0.6, 1.1
     panel_width = left + axes_width + bar_gap + bar_width + bar_label
     fig = plt.figure(figsize=(panels * panel_width, bottom + axes_height + top))
     fig_w, fig_h = fig.get_size_inches()
@@ -196,8 +196,8 @@ def render(snapshot, out_path, color, slab_dp, slab_center_dp):
     t_ref = float(params.get("t_ref_s", 0.0))
     when = f"t = {snapshot['time']:.4g} s" + (f" = {snapshot['time'] / t_ref:.3g} $t_{{ref}}$" if t_ref > 0 else "")
     phi = float(params.get("solids_fraction", 0.0))
-    fig.suptitle(f"{scene}: $\\langle\\phi\\rangle$ = {phi:g}, {when} (step {snapshot['step']})", fontsize=10,
-                 y=1 - 0.12 / fig_h, va="top")
+    fig.suptitle(f"{scene}, $\\langle\\phi\\rangle$ = {phi:g}\n{when} (step {snapshot['step']})", fontsize=10,
+                 y=1 - 0.08 / fig_h, va="top")
     try:
         fig.savefig(out_path, dpi=150)
     except OSError as error:

@@ -1,0 +1,83 @@
+#!/usr/bin/env bash
+# e2e (issue 11, items 3 and 6): a short coupled run and a short dry run as a user makes them, then
+#   - the --set of an alternative: sedimentation_demo gives run.end_time_tref and dump_interval_tref,
+#     --set run.end_time / run.dump_interval (s) replace them and the run ends at the time given;
+#   - run.xmf names every dataset of every snapshot's /particles and /fluid groups (h5py's listing);
+#   - tools/render_snapshot.py draws both runs to PNG (two panels with fluid, one without) and
+#     refuses bad input with exit status 2 and a message naming the file or option.
+#
+# Environment (set by CTest): CGD_SOURCE_DIR, CGD_BINARY_DIR.
+set -u
+
+source_dir=${CGD_SOURCE_DIR:-$(cd "$(dirname "$0")/../.." && pwd)}
+binary_dir=${CGD_BINARY_DIR:-$source_dir/build}
+generate=$binary_dir/cgd-generate
+python=/usr/bin/python3
+if [ ! -x "$generate" ]; then echo "SKIP: $generate not built"; exit 0; fi
+if ! "$python" -c 'import h5py, matplotlib' 2>/dev/null; then echo "SKIP: $python lacks h5py or matplotlib"; exit 0; fi
+
+tmp=$(mktemp -d)
+trap 'rm -rf "$tmp"' EXIT
+failures=0
+fail() { echo "FAIL $1"; failures=$((failures + 1)); }
+
+# a coupled run of 2 ms in a small box, its times given in s on a scene that gives them in t_ref
+"$generate" "$source_dir/data/scenes/sedimentation_demo.toml" --set 'domain.size_dp=[20,80,20]' \
+  --set run.end_time=0.002 --set run.dump_interval=0.001 --quiet -o "$tmp/coupled" >"$tmp/coupled.log" 2>&1 ||
+  { cat "$tmp/coupled.log"; fail "coupled run with --set run.end_time on a scene with run.end_time_tref"; }
+"$generate" "$source_dir/data/scenes/dry_settling.toml" --set run.end_time=2e-5 --set run.dump_interval=1e-5 \
+  --quiet -o "$tmp/dry" >"$tmp/dry.log" 2>&1 || { cat "$tmp/dry.log"; fail "dry run"; }
+
+"$python" - "$tmp/coupled" "$tmp/dry" <<'PY' || fail "run.xmf against the snapshots"
+import os, sys, h5py, xml.etree.ElementTree as ET
+coupled, dry = sys.argv[1:]
+with open(os.path.join(coupled, "scene.toml")) as f:
+    scene = f.read()
+assert "end_time = 0.002" in scene and "end_time_tref" not in scene, "the --set did not replace end_time_tref"
+for run in (coupled, dry):
+    frames = ET.parse(os.path.join(run, "run.xmf")).getroot().findall("./Domain/Grid/Grid")
+    assert len(frames) == 3, (run, len(frames))
+    for frame in frames:
+        items = [i.text for i in frame.iter("DataItem") if i.get("Format") == "HDF"]
+        file = items[0].split(":")[0]
+        with h5py.File(os.path.join(run, file), "r") as f:
+            everything = {"%s:/%s/%s" % (file, g, n) for g in ("particles", "fluid") if g in f for n in f[g]}
+        missing = everything - set(items)
+        assert not missing, (run, "not in run.xmf", sorted(missing))
+        if run == coupled:
+            for name in ("drag_coefficient", "fluid_velocity", "pressure_gradient"):
+                assert "%s:/particles/%s" % (file, name) in items, name
+print("ok   run.xmf names every dataset of every snapshot (coupled and dry)")
+PY
+
+render=$source_dir/tools/render_snapshot.py
+"$python" "$render" "$tmp/coupled" -o "$tmp/coupled.png" >/dev/null && [ -s "$tmp/coupled.png" ] || fail "render coupled"
+"$python" "$render" "$tmp/coupled/snapshots/snap_000000000.h5" -o "$tmp/phi.png" --color phi >/dev/null &&
+  [ -s "$tmp/phi.png" ] || fail "render a snapshot file by local phi"
+"$python" "$render" "$tmp/dry" -o "$tmp/dry.png" --color speed >/dev/null && [ -s "$tmp/dry.png" ] || fail "render dry"
+"$python" - "$tmp/coupled.png" "$tmp/dry.png" <<'PY' || fail "picture sizes"
+import sys, matplotlib.image as im
+coupled, dry = (im.imread(p).shape for p in sys.argv[1:])
+assert coupled[1] > 1.5 * dry[1], ("two panels with fluid, one without", coupled, dry)
+PY
+
+# expect_bad NAME EXPECTED -- ARGS: render_snapshot.py ARGS exits 2 with EXPECTED on stderr
+expect_bad() {
+  local name=$1 expected=$2; shift 3
+  "$python" "$render" "$@" >/dev/null 2>"$tmp/err"
+  local status=$?
+  if [ "$status" -ne 2 ] || ! grep -qF -- "$expected" "$tmp/err"; then
+    fail "$name: status $status (expected 2), stderr: $(cat "$tmp/err")"
+  else
+    echo "ok   $name: $(head -n 1 "$tmp/err")"
+  fi
+}
+expect_bad missing       "no such file or directory"         -- "$tmp/none" -o "$tmp/x.png"
+expect_bad not-snapshot  "cgd_format = 'series'"             -- "$tmp/coupled/series.h5" -o "$tmp/x.png"
+expect_bad phi-when-dry  "--color phi: the snapshot has no fluid grid" -- "$tmp/dry" -o "$tmp/x.png" --color phi
+expect_bad slab-outside  "--slab-center 500: outside the box" -- "$tmp/dry" -o "$tmp/x.png" --slab-center 500
+expect_bad unknown-color "invalid choice"                    -- "$tmp/dry" -o "$tmp/x.png" --color red
+expect_bad unwritable    "-o $tmp/none/x.png: cannot write"  -- "$tmp/dry" -o "$tmp/none/x.png"
+
+if [ "$failures" -ne 0 ]; then echo "$failures check(s) failed"; exit 1; fi
+echo "all render and run.xmf checks passed"
