@@ -1,4 +1,4 @@
-// Scene loading, --set overrides, validation and derived numbers (design.md "Scenes", models.md).
+// Scene loading, --set overrides, validation and derived numbers (design.md "Scenes", docs/models.md).
 // The only file that sees the TOML parser: everything after load_scene works on plain structs.
 //
 // Steps of load_scene_from_string:
@@ -103,7 +103,7 @@ const std::vector<SectionSpec>& schema() {
         {"seed", Kind::Integer, "seed of the random placement and velocities"}}},
       {"contact",
        {{"model", Kind::String, "contact law"},
-        {"gamma_star", Kind::Number, "dimensionless stiffness (models.md)"},
+        {"gamma_star", Kind::Number, "dimensionless stiffness (docs/models.md "Contact law")"},
         {"stiffness", Kind::Number, "N/m, normal spring stiffness of two primaries"},
         {"t_star", Kind::Number, "dt_DEM / t_c"},
         {"restitution", Kind::Number, "normal coefficient of restitution"},
@@ -905,7 +905,7 @@ Scene build_scene(const SceneReader& in, const ToolAccepts& accepts) {
     nm.sort_interval_steps = *v;
   }
 
-  // ---- derived numbers (models.md) ----
+  // ---- derived numbers (docs/models.md) ----
   DerivedScales& x = s.derived;
   x.particle_volume_m3 = sphere_volume(d);
   x.particle_mass_kg = p.density_kg_m3 * x.particle_volume_m3;
@@ -958,7 +958,7 @@ Scene build_scene(const SceneReader& in, const ToolAccepts& accepts) {
     const double k_n_primary =
         c.stiffness_n_N_m ? *c.stiffness_n_N_m
                           : stiffness_from_gamma_star(*c.gamma_star, p.density_kg_m3, d, g, x.u_t_m_s);
-    // models.md "Parcels": k_n,parcel = alpha k_n keeps restitution, relative overlap and t_c/(d/v).
+    // docs/models.md "Parcels": k_n,parcel = alpha k_n keeps restitution, relative overlap and t_c/(d/v).
     const SpringDashpot sd = spring_dashpot(p.parcel_size * k_n_primary, c.restitution,
                                             x.parcel_mass_kg / 2.0, c.kn_over_kt, c.gamman_over_gammat);
     x.k_n_N_m = sd.k_n;

@@ -30,7 +30,7 @@ enum class ContactModel { None, SpringDashpot };
 
 struct ContactConfig {
   ContactModel model = ContactModel::SpringDashpot;
-  std::optional<double> gamma_star;  // dimensionless stiffness (models.md); or stiffness_n
+  std::optional<double> gamma_star;  // dimensionless stiffness (docs/models.md "Contact law"); or stiffness_n
   std::optional<double> stiffness_n_N_m;
   double t_star = 0.02;              // dt_DEM / t_c
   double restitution = 0.9;
@@ -83,7 +83,7 @@ struct DerivedScales {
   double parcel_diameter_m = 0;       // alpha * d_p (collision diameter)
   double parcel_mass_kg = 0;          // alpha^3 * primary mass
   // fluid-related; 0 when the scene has no fluid
-  double u_t_m_s = 0;                 // Schiller-Naumann terminal velocity (models.md convention)
+  double u_t_m_s = 0;                 // Schiller-Naumann terminal velocity (docs/models.md convention)
   double re_p = 0;                    // rho_f d u_t / mu_f
   double fr_p = 0;                    // u_t^2 / (g d_p)
   double l_ref_m = 0;                 // u_t^2 / g

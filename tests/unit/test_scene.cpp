@@ -1,4 +1,4 @@
-// Scene loading: validation messages (table-driven), derived numbers against models.md and the
+// Scene loading: validation messages (table-driven), derived numbers against docs/models.md and the
 // peer benchmark's params.inc, --set overrides, the shipped scenes, and the command-line front.
 #include <gtest/gtest.h>
 
@@ -481,15 +481,15 @@ TEST(SceneDerived, PaperParametersGiveTheReferenceScalesOfModelsMd) {
   const auto s = load_scene_from_string(kWetScene, "paper.toml");
   const auto& x = s.derived;
   const double d = 75e-6;
-  // models.md quotes these to the digits below; tolerances are half a unit of the last digit quoted.
+  // docs/models.md quotes these to the digits below; tolerances are half a unit of the last digit quoted.
   EXPECT_NEAR(x.u_t_m_s, 0.2185, 0.00005);
   EXPECT_NEAR(x.re_p, 1.18, 0.005);
   EXPECT_NEAR(x.fr_p, 65.0, 0.5);
   EXPECT_NEAR(x.l_ref_m, 4.86e-3, 0.005e-3);
   EXPECT_NEAR(x.l_char_m / d, 4.02,
-              0.005);  // (models.md's "3.02e-4 m" is 4.02 d_p rounded up; 4.018 d_p = 3.013e-4 m)
+              0.005);  // (docs/models.md's "3.02e-4 m" is 4.02 d_p rounded up; 4.018 d_p = 3.013e-4 m)
   EXPECT_NEAR(x.t_ref_s, 0.0223, 0.00005);
-  // Contact numbers of models.md (1.27 N/m, 3.59e-5 s, 7.18e-7 s) are rounded from u_t ~= 0.219 m/s
+  // Contact numbers of docs/models.md (1.27 N/m, 3.59e-5 s, 7.18e-7 s) are rounded from u_t ~= 0.219 m/s
   // (the peer benchmark's value); with u_t = 0.21851 m/s the same gamma* gives k_n = 1.2760 N/m.
   // So: within 0.5 % of the quoted values, and exact against the formulas below.
   EXPECT_LT(relative(x.k_n_N_m, 1.27), 0.005);
@@ -546,7 +546,7 @@ TEST(SceneDerived, PeerBenchmarkStiffnessReproducesParamsInc) {
 }
 
 TEST(SceneDerived, ParcelsScaleStiffnessAndContactTimeWithParcelSize) {
-  // models.md "Parcels": mass alpha^3 m, k_n,parcel = alpha k_n, so t_c,parcel = alpha t_c.
+  // docs/models.md "Parcels": mass alpha^3 m, k_n,parcel = alpha k_n, so t_c,parcel = alpha t_c.
   const std::string base = replaced(kDryScene, "size_dp = [32, 32, 32]", "size_dp = [64, 64, 64]");
   const auto one = load_scene_from_string(base, "a.toml");
   const auto two = load_scene_from_string(base, "b.toml", {"particles.parcel_size=2"});
@@ -840,7 +840,7 @@ TEST(SceneFiles, EveryShippedSceneLoads) {
 
 TEST(SceneFiles, PeerBenchmarkScenesMatchThePeerCounts) {
   const std::filesystem::path dir = scene_dir();
-  // shared/peers/README.md: N per case (gen_init rounds phi V / V_p the same way)
+  // bench/README.md: N per case (gen_init rounds phi V / V_p the same way)
   const std::vector<std::pair<const char*, std::int64_t>> cases = {
       {"bench_s10", 25033}, {"bench_s30", 75099}, {"bench_l10", 200263}, {"bench_l30", 600790}};
   for (const auto& [name, count] : cases) {
