@@ -1,10 +1,13 @@
 #!/usr/bin/env bash
-# e2e (issue 11, items 3 and 6): a short coupled run and a short dry run as a user makes them, then
+# e2e (issue 11, items 3, 6 and 7): a short coupled run, a short quiescent run and a short dry run as a
+# user makes them, then
 #   - the --set of an alternative: sedimentation_demo gives run.end_time_tref and dump_interval_tref,
 #     --set run.end_time / run.dump_interval (s) replace them and the run ends at the time given;
 #   - run.xmf names every dataset of every snapshot's /particles and /fluid groups (h5py's listing);
 #   - tools/render_snapshot.py draws both runs to PNG (two panels with fluid, one without) and
-#     refuses bad input with exit status 2 and a message naming the file or option.
+#     refuses bad input with exit status 2 and a message naming the file or option;
+#   - tools/plot_series.py plots a dry run's energies, divides a quiescent run's slip by its own law's
+#     terminal velocity (dry_settling: Stokes without buoyancy, 0.2555 m/s) and refuses to mix the two.
 #
 # Environment (set by CTest): CGD_SOURCE_DIR, CGD_BINARY_DIR.
 set -u
@@ -27,6 +30,9 @@ fail() { echo "FAIL $1"; failures=$((failures + 1)); }
   { cat "$tmp/coupled.log"; fail "coupled run with --set run.end_time on a scene with run.end_time_tref"; }
 "$generate" "$source_dir/data/scenes/dry_settling.toml" --set run.end_time=2e-5 --set run.dump_interval=1e-5 \
   --quiet -o "$tmp/dry" >"$tmp/dry.log" 2>&1 || { cat "$tmp/dry.log"; fail "dry run"; }
+
+"$generate" "$source_dir/data/scenes/granular_gas.toml" --set run.end_time=1e-4 --quiet -o "$tmp/gas" \
+  >"$tmp/gas.log" 2>&1 || { cat "$tmp/gas.log"; fail "granular gas run"; }
 
 "$python" - "$tmp/coupled" "$tmp/dry" <<'PY' || fail "run.xmf against the snapshots"
 import os, sys, h5py, xml.etree.ElementTree as ET
@@ -79,5 +85,16 @@ expect_bad slab-outside  "--slab-center 500: outside the box" -- "$tmp/dry" -o "
 expect_bad unknown-color "invalid choice"                    -- "$tmp/dry" -o "$tmp/x.png" --color red
 expect_bad unwritable    "-o $tmp/none/x.png: cannot write"  -- "$tmp/dry" -o "$tmp/none/x.png"
 
+series=$source_dir/tools/plot_series.py
+"$python" "$series" "$tmp/gas" -o "$tmp/gas.png" >"$tmp/gas.out" 2>&1 && [ -s "$tmp/gas.png" ] &&
+  grep -q "dry run" "$tmp/gas.out" || { cat "$tmp/gas.out"; fail "plot_series.py on a dry run"; }
+"$python" "$series" "$tmp/dry" -o "$tmp/quiescent.png" >"$tmp/q.out" 2>&1 &&
+  grep -q "u_ref = u_t of stokes drag = 0.2555 m/s" "$tmp/q.out" || { cat "$tmp/q.out"; fail "quiescent slip scale"; }
+"$python" "$series" "$tmp/coupled" -o "$tmp/coupled_slip.png" >"$tmp/c.out" 2>&1 &&
+  grep -q "u_ref = u_t (Schiller-Naumann) = 0.2185 m/s" "$tmp/c.out" || { cat "$tmp/c.out"; fail "coupled slip scale"; }
+"$python" "$series" "$tmp/gas" "$tmp/coupled" -o "$tmp/mixed.png" >/dev/null 2>"$tmp/mixed.err"
+[ $? -eq 2 ] && grep -q "cannot share one plot" "$tmp/mixed.err" || fail "plot_series.py mixing dry and fluid runs"
+[ "$failures" -eq 0 ] && echo "ok   plot_series.py: dry energies, quiescent and coupled slip scales, no mixing"
+
 if [ "$failures" -ne 0 ]; then echo "$failures check(s) failed"; exit 1; fi
-echo "all render and run.xmf checks passed"
+echo "all tool checks passed"
