@@ -28,10 +28,7 @@ import sys
 try:
     import h5py
     import numpy as np
-    import matplotlib
-    matplotlib.use("Agg")  # headless: no display needed
-    import matplotlib.pyplot as plt
-    from matplotlib.collections import EllipseCollection
+    import matplotlib  # noqa: F401 (drawn with in render_matplotlib)
 except ImportError as missing:
     # `python3` on PATH may not be Debian's; its python3-h5py/python3-matplotlib live with /usr/bin/python3.
     system_python = "/usr/bin/python3"
@@ -97,8 +94,10 @@ def cell_index(position, fluid):
     return np.mod(index, n)
 
 
-def render(snapshot, out_path, color, slab_dp, slab_center_dp):
-    """Draw `snapshot` (read_snapshot) to `out_path`; see the module's doc for the panels."""
+def picture(snapshot, color, slab_dp, slab_center_dp):
+    """What both backends draw: the particles of the slab (in d_p) with their colour values and scale, the
+    void-fraction layer through the slab (or None) and the texts. Raises BadInput for a slab outside the
+    box or --color phi without a fluid."""
     params = snapshot["params"]
     d = float(params["diameter_m"])
     box = np.asarray(params["box_size_m"], dtype=float)
@@ -117,28 +116,63 @@ def render(snapshot, out_path, color, slab_dp, slab_center_dp):
     x = snapshot["particles"]["position"]
     v = snapshot["particles"]["velocity"]
     z_dp = np.mod(x[:, 2], box[2]) / d
-    # the slab, periodic in z
-    dz = np.abs((z_dp - center_dp + box_dp[2] / 2) % box_dp[2] - box_dp[2] / 2)
+    dz = np.abs((z_dp - center_dp + box_dp[2] / 2) % box_dp[2] - box_dp[2] / 2)  # the slab, periodic in z
     in_slab = dz <= slab_dp / 2
-    xs = np.mod(x[in_slab, 0], box[0]) / d
-    ys = np.mod(x[in_slab, 1], box[1]) / d
-    sizes = snapshot["particles"]["diameter"][in_slab] / d
+    pic = {"box_dp": box_dp, "xs": np.mod(x[in_slab, 0], box[0]) / d, "ys": np.mod(x[in_slab, 1], box[1]) / d,
+           "zs": z_dp[in_slab], "sizes": snapshot["particles"]["diameter"][in_slab] / d}
 
     u_t = float(params.get("u_t_m_s", 0.0))
     if color == "vy":
-        values, label, cmap = v[in_slab, 1], "particle velocity $v_y$ (m/s)", "coolwarm"
+        values = v[in_slab, 1]
         limit = np.percentile(np.abs(values), 99) if values.size else 1.0
-        vmin, vmax = -limit, limit
+        pic.update(values=values, label=("particle velocity $v_y$ (m/s)", "v_y (m/s)"), cmap="coolwarm",
+                   vmin=-limit, vmax=limit)
     elif color == "speed":
-        values, label, cmap = np.linalg.norm(v[in_slab], axis=1), "particle speed $|v|$ (m/s)", "viridis"
-        vmin, vmax = 0.0, np.percentile(values, 99) if values.size else 1.0
+        values = np.linalg.norm(v[in_slab], axis=1)
+        pic.update(values=values, label=("particle speed $|v|$ (m/s)", "|v| (m/s)"), cmap="viridis",
+                   vmin=0.0, vmax=np.percentile(values, 99) if values.size else 1.0)
     else:
         i = cell_index(x[in_slab], fluid)
         values = 1.0 - fluid["void_fraction"][i[:, 2], i[:, 1], i[:, 0]]
-        label, cmap = r"solids fraction $\phi = 1-\varepsilon$ of the particle's cell (1)", "magma_r"
-        vmin, vmax = 0.0, max(values.max() if values.size else 0.0, 1e-3)
+        pic.update(values=values, cmap="magma_r", vmin=0.0, vmax=max(values.max() if values.size else 0.0, 1e-3),
+                   label=(r"solids fraction $\phi = 1-\varepsilon$ of the particle's cell (1)", "phi of the cell (1)"))
+    if color != "phi" and u_t > 0:  # the scale of the run's velocities
+        pic["label"] = (pic["label"][0] + f"; $u_t$ = {u_t:.3g} m/s", pic["label"][1] + f", u_t = {u_t:.3g} m/s")
+    pic["particles_title"] = (f"particles, {slab_dp:g} $d_p$ slab at $z$ = {center_dp:g} $d_p$\n"
+                              f"({in_slab.sum()} of {len(x)})")
 
-    panels = 2 if fluid is not None else 1
+    pic["eps"] = None
+    if fluid is not None:
+        eps = fluid["void_fraction"]
+        spacing_dp = fluid["spacing"] / d
+        k = int(np.floor((center_dp * d - fluid["origin"][2]) / fluid["spacing"][2])) % eps.shape[0]
+        layer = eps[k]  # (n_y, n_x)
+        origin_dp = fluid["origin"] / d
+        pic["eps"] = layer
+        pic["eps_origin_dp"], pic["eps_spacing_dp"] = origin_dp, spacing_dp
+        pic["eps_extent"] = [origin_dp[0], origin_dp[0] + layer.shape[1] * spacing_dp[0],
+                             origin_dp[1], origin_dp[1] + layer.shape[0] * spacing_dp[1]]
+        pic["eps_range"] = (min(layer.min(), 1.0 - 1e-3), 1.0)
+        pic["eps_title"] = (f"void fraction, cell layer {k} of {eps.shape[0]}\n"
+                            f"($z$ = {k * spacing_dp[2]:.3g} to {(k + 1) * spacing_dp[2]:.3g} $d_p$)")
+
+    scene = text(params.get("scene_name", ""))
+    t_ref = float(params.get("t_ref_s", 0.0))
+    when = f"t = {snapshot['time']:.4g} s" + (f" = {snapshot['time'] / t_ref:.3g} $t_{{ref}}$" if t_ref > 0 else "")
+    phi = float(params.get("solids_fraction", 0.0))
+    pic["title"] = f"{scene}, $\\langle\\phi\\rangle$ = {phi:g}\n{when} (step {snapshot['step']})"
+    return pic
+
+
+def render_matplotlib(pic, out_path):
+    """The two panels with matplotlib (Agg: no display)."""
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    from matplotlib.collections import EllipseCollection
+
+    box_dp = pic["box_dp"]
+    panels = 2 if pic["eps"] is not None else 1
     aspect = box_dp[1] / box_dp[0]  # a tall box: the vertical is the long axis
     axes_height = 7.0 if aspect >= 2 else 4.5  # inches
     axes_width = min(axes_height / aspect, 6.0)
@@ -156,48 +190,32 @@ def render(snapshot, out_path, color, slab_dp, slab_center_dp):
         return ax, cax
 
     ax, cax = panel(0)
+    sizes = pic["sizes"]
     circles = EllipseCollection(sizes, sizes, np.zeros_like(sizes), units="xy",
-                                offsets=np.column_stack([xs, ys]), offset_transform=ax.transData,
-                                cmap=cmap, linewidths=0)
-    circles.set_array(values)
-    circles.set_clim(vmin, vmax)
+                                offsets=np.column_stack([pic["xs"], pic["ys"]]), offset_transform=ax.transData,
+                                cmap=pic["cmap"], linewidths=0)
+    circles.set_array(pic["values"])
+    circles.set_clim(pic["vmin"], pic["vmax"])
     ax.add_collection(circles)
     ax.set_xlim(0, box_dp[0])
     ax.set_ylim(0, box_dp[1])
     ax.set_aspect("equal")
     ax.set_xlabel("$x / d_p$")
     ax.set_ylabel("$y / d_p$ (vertical, gravity down)")
-    ax.set_title(f"particles, {slab_dp:g} $d_p$ slab at $z$ = {center_dp:g} $d_p$\n"
-                 f"({in_slab.sum()} of {len(x)})", fontsize=9)
-    bar = fig.colorbar(circles, cax=cax)
-    if color != "phi" and u_t > 0:  # the scale of the run's velocities
-        label += f"; $u_t$ = {u_t:.3g} m/s"
-    bar.set_label(label)
+    ax.set_title(pic["particles_title"], fontsize=9)
+    fig.colorbar(circles, cax=cax).set_label(pic["label"][0])
 
-    if fluid is not None:
-        eps = fluid["void_fraction"]
-        spacing_dp = fluid["spacing"] / d
-        k = int(np.floor((center_dp * d - fluid["origin"][2]) / fluid["spacing"][2])) % eps.shape[0]
-        layer = eps[k]  # (n_y, n_x)
+    if pic["eps"] is not None:
         ax2, cax2 = panel(1)
-        extent = [fluid["origin"][0] / d, fluid["origin"][0] / d + layer.shape[1] * spacing_dp[0],
-                  fluid["origin"][1] / d, fluid["origin"][1] / d + layer.shape[0] * spacing_dp[1]]
-        image = ax2.imshow(layer, origin="lower", extent=extent, cmap="cividis", interpolation="nearest",
-                           vmin=min(layer.min(), 1.0 - 1e-3), vmax=1.0)
+        image = ax2.imshow(pic["eps"], origin="lower", extent=pic["eps_extent"], cmap="cividis",
+                           interpolation="nearest", vmin=pic["eps_range"][0], vmax=pic["eps_range"][1])
         ax2.set_aspect("equal")
         ax2.set_xlabel("$x / d_p$")
         ax2.set_ylabel("$y / d_p$")
-        ax2.set_title(f"void fraction, cell layer {k} of {eps.shape[0]}\n"
-                      f"($z$ = {k * spacing_dp[2]:.3g} to {(k + 1) * spacing_dp[2]:.3g} $d_p$)", fontsize=9)
-        bar2 = fig.colorbar(image, cax=cax2)
-        bar2.set_label(r"void fraction $\varepsilon$ (1)")
+        ax2.set_title(pic["eps_title"], fontsize=9)
+        fig.colorbar(image, cax=cax2).set_label(r"void fraction $\varepsilon$ (1)")
 
-    scene = text(params.get("scene_name", ""))
-    t_ref = float(params.get("t_ref_s", 0.0))
-    when = f"t = {snapshot['time']:.4g} s" + (f" = {snapshot['time'] / t_ref:.3g} $t_{{ref}}$" if t_ref > 0 else "")
-    phi = float(params.get("solids_fraction", 0.0))
-    fig.suptitle(f"{scene}, $\\langle\\phi\\rangle$ = {phi:g}\n{when} (step {snapshot['step']})", fontsize=10,
-                 y=1 - 0.08 / fig_h, va="top")
+    fig.suptitle(pic["title"], fontsize=10, y=1 - 0.08 / fig_h, va="top")
     try:
         fig.savefig(out_path, dpi=150)
     except OSError as error:
@@ -222,7 +240,7 @@ def main(argv=None):
     args = parser.parse_args(argv)
     try:
         path = find_snapshot(args.snapshot)
-        render(read_snapshot(path), args.output, args.color, args.slab, args.slab_center)
+        render_matplotlib(picture(read_snapshot(path), args.color, args.slab, args.slab_center), args.output)
     except BadInput as error:
         sys.stderr.write(f"render_snapshot.py: error: {error}\n")
         return 2
