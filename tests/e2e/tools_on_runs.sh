@@ -57,15 +57,24 @@ print("ok   run.xmf names every dataset of every snapshot (coupled and dry)")
 PY
 
 render=$source_dir/tools/render_snapshot.py
-"$python" "$render" "$tmp/coupled" -o "$tmp/coupled.png" >/dev/null && [ -s "$tmp/coupled.png" ] || fail "render coupled"
-"$python" "$render" "$tmp/coupled/snapshots/snap_000000000.h5" -o "$tmp/phi.png" --color phi >/dev/null &&
+"$python" "$render" "$tmp/coupled" -o "$tmp/coupled.png" --backend matplotlib >/dev/null && [ -s "$tmp/coupled.png" ] || fail "render coupled"
+"$python" "$render" "$tmp/coupled/snapshots/snap_000000000.h5" -o "$tmp/phi.png" --color phi --backend matplotlib >/dev/null &&
   [ -s "$tmp/phi.png" ] || fail "render a snapshot file by local phi"
-"$python" "$render" "$tmp/dry" -o "$tmp/dry.png" --color speed >/dev/null && [ -s "$tmp/dry.png" ] || fail "render dry"
+"$python" "$render" "$tmp/dry" -o "$tmp/dry.png" --color speed --backend matplotlib >/dev/null && [ -s "$tmp/dry.png" ] || fail "render dry"
 "$python" - "$tmp/coupled.png" "$tmp/dry.png" <<'PY' || fail "picture sizes"
 import sys, matplotlib.image as im
 coupled, dry = (im.imread(p).shape for p in sys.argv[1:])
 assert coupled[1] > 1.5 * dry[1], ("two panels with fluid, one without", coupled, dry)
 PY
+
+# ParaView's backend, where Debian's python3-paraview and Xvfb are installed (a virtual display is made)
+if "$python" -c 'import paraview.simple' 2>/dev/null && command -v Xvfb >/dev/null; then
+  env -u DISPLAY "$python" "$render" "$tmp/coupled" -o "$tmp/pv.png" --backend paraview >"$tmp/pv.out" 2>&1 &&
+    [ -s "$tmp/pv.png" ] && grep -q "(ParaView)" "$tmp/pv.out" || { cat "$tmp/pv.out"; fail "render with ParaView"; }
+  [ "$failures" -eq 0 ] && echo "ok   render_snapshot.py --backend paraview"
+else
+  echo "skip render_snapshot.py --backend paraview (no python3-paraview or no Xvfb)"
+fi
 
 # expect_bad NAME EXPECTED -- ARGS: render_snapshot.py ARGS exits 2 with EXPECTED on stderr
 expect_bad() {
@@ -84,6 +93,7 @@ expect_bad phi-when-dry  "--color phi: the snapshot has no fluid grid" -- "$tmp/
 expect_bad slab-outside  "--slab-center 500: outside the box" -- "$tmp/dry" -o "$tmp/x.png" --slab-center 500
 expect_bad unknown-color "invalid choice"                    -- "$tmp/dry" -o "$tmp/x.png" --color red
 expect_bad unwritable    "-o $tmp/none/x.png: cannot write"  -- "$tmp/dry" -o "$tmp/none/x.png"
+expect_bad not-a-backend "invalid choice"                    -- "$tmp/dry" -o "$tmp/x.png" --backend vtk
 
 series=$source_dir/tools/plot_series.py
 "$python" "$series" "$tmp/gas" -o "$tmp/gas.png" >"$tmp/gas.out" 2>&1 && [ -s "$tmp/gas.png" ] &&
