@@ -1,4 +1,4 @@
-// Scene loading, --set overrides, validation and derived numbers (design.md "Scenes", docs/models.md).
+// Scene loading, --set overrides, validation and derived numbers (the formulas: docs/models.md).
 // The only file that sees the TOML parser: everything after load_scene works on plain structs.
 //
 // Steps of load_scene_from_string:
@@ -167,8 +167,8 @@ const KeySpec& key_spec(std::string_view section, std::string_view key) {
 // ---- alternatives --------------------------------------------------------------------------------
 
 /// Two keys that give one quantity in two ways (e.g. a time in s or in units of t_ref). A scene file
-/// gives at most one of them; a --set of either replaces the other (design.md "Scenes": any key can be
-/// overridden from the command line, whichever of the pair the file uses).
+/// gives at most one of them; a --set of either replaces the other (any key can be overridden from the
+/// command line, whichever of the pair the file uses).
 struct Alternative {
   const char* section;
   const char* first;         // the key named first in messages

@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# e2e: cgd-generate refuses bad input the way design.md "Command lines" says: exit status 2,
+# e2e: cgd-generate refuses bad input the way the README's "Exit statuses" says: exit status 2,
 # a message on stderr that names the file and the key, and nothing written (the run directory
 # given with -o does not exist afterwards). --help and --version exit 0 and write nothing either.
 #
