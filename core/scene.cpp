@@ -103,7 +103,7 @@ const std::vector<SectionSpec>& schema() {
         {"seed", Kind::Integer, "seed of the random placement and velocities"}}},
       {"contact",
        {{"model", Kind::String, "contact law"},
-        {"gamma_star", Kind::Number, "dimensionless stiffness (docs/models.md "Contact law")"},
+        {"gamma_star", Kind::Number, "dimensionless stiffness (docs/models.md, \"Contact law\")"},
         {"stiffness", Kind::Number, "N/m, normal spring stiffness of two primaries"},
         {"t_star", Kind::Number, "dt_DEM / t_c"},
         {"restitution", Kind::Number, "normal coefficient of restitution"},
