@@ -122,7 +122,8 @@ const std::vector<SectionSpec>& schema() {
         {"drag_model", Kind::String, "path of the drag model file (cgd-fit) used by drag = \"model\""},
         {"drag_model_checksum", Kind::String, "FNV-1a checksum of fluid.drag_model (recorded by cgd)"},
         {"pressure_gradient_force", Kind::Boolean, "apply -V_p grad p to the particles"},
-        {"parcel_correction", Kind::Boolean, "apply c_corr(alpha) of a filtered law (false: the parcel fit's runs)"}}},
+        {"parcel_correction", Kind::Boolean,
+         "apply c_corr(alpha) of a filtered law (false: the parcel fit's runs)"}}},
       {"run",
        {{"end_time", Kind::Number, "s, simulated time"},
         {"end_time_tref", Kind::Number, "simulated time in units of t_ref = u_t/g"},
@@ -132,7 +133,8 @@ const std::vector<SectionSpec>& schema() {
         {"series_interval_tref", Kind::Number, "time-series interval in units of t_ref = u_t/g"},
         {"checkpoint_wall_s", Kind::Number, "wall-clock seconds between checkpoints"},
         {"sampling_start", Kind::Number, "s, start of the window of time averages (after the transient)"},
-        {"sampling_start_tref", Kind::Number, "start of the window of time averages in units of t_ref = u_t/g"},
+        {"sampling_start_tref", Kind::Number,
+         "start of the window of time averages in units of t_ref = u_t/g"},
         {"dt", Kind::Number, "s, explicit DEM time step"}}},
       {"numerics",
        {{"void_fraction_floor", Kind::Number, "smallest void fraction the fluid sees (conservative floor)"},
@@ -171,9 +173,9 @@ const KeySpec& key_spec(std::string_view section, std::string_view key) {
 /// command line, whichever of the pair the file uses).
 struct Alternative {
   const char* section;
-  const char* first;         // the key named first in messages
+  const char* first;  // the key named first in messages
   const char* second;
-  const char* first_unit;    // how each gives the quantity, quoted in messages
+  const char* first_unit;  // how each gives the quantity, quoted in messages
   const char* second_unit;
 };
 
@@ -263,7 +265,8 @@ std::string unknown_section_message(std::string_view given) {
 /// "unknown key section.key; did you mean ...?" A key that exists in another section is taken as
 /// misplaced before a near name in its own section is offered as a typo. With `with_key_list`, the
 /// keys of the section follow (a message listing several problems lists them once, at its end).
-std::string unknown_key_message(const SectionSpec& section, std::string_view given, bool with_key_list = true) {
+std::string unknown_key_message(const SectionSpec& section, std::string_view given,
+                                bool with_key_list = true) {
   std::string msg = "unknown key " + std::string(section.name) + "." + std::string(given);
   const SectionSpec* home = nullptr;
   for (const auto& other : schema())
@@ -457,9 +460,10 @@ class SceneReader {
     const std::string section = pair.section;
     const std::string first = section + "." + pair.first, second = section + "." + pair.second;
     return first + " = " + format_node(*node(section, pair.first)) + " and " + second + " = " +
-           format_node(*node(section, pair.second)) + ": give either " + first + " (" + pair.first_unit + ") or " +
-           second + " (" + pair.second_unit + "), not both: delete one of them from the scene (on the command " +
-           "line, --set " + first + "=VALUE replaces " + second + ", and the other way round)";
+           format_node(*node(section, pair.second)) + ": give either " + first + " (" + pair.first_unit +
+           ") or " + second + " (" + pair.second_unit +
+           "), not both: delete one of them from the scene (on the command line, --set " + first +
+           "=VALUE replaces " + second + ", and the other way round)";
   }
 
   const toml::node* node(std::string_view section, std::string_view key) const {
@@ -491,7 +495,8 @@ class SceneReader {
                        s.name + "])?";
             break;
           }
-        problems.push_back(message + " (every key belongs in a section: " + join(section_names(), ", ") + ")");
+        problems.push_back(message + " (every key belongs in a section: " + join(section_names(), ", ") +
+                           ")");
         continue;
       }
       if (!section) {
@@ -507,7 +512,8 @@ class SceneReader {
             sections_with_unknown_keys.push_back(section);
           continue;
         }
-        if (!has_kind(value, spec->kind)) problems.push_back(value_message(section->name, key.str(), type_rule(*spec, value)));
+        if (!has_kind(value, spec->kind))
+          problems.push_back(value_message(section->name, key.str(), type_rule(*spec, value)));
       }
       for (const auto& pair : alternatives())
         if (section_name == pair.section && has(pair.section, pair.first) && has(pair.section, pair.second))
@@ -522,7 +528,8 @@ class SceneReader {
     }
     std::string message = std::to_string(problems.size()) + " problems:";
     for (const auto& problem : problems) message += "\n  " + problem;
-    for (const SectionSpec* section : sections_with_unknown_keys) message += "\n  (" + section_key_list(*section) + ")";
+    for (const SectionSpec* section : sections_with_unknown_keys)
+      message += "\n  (" + section_key_list(*section) + ")";
     fail(message);
   }
 
@@ -712,7 +719,8 @@ DragLaw drag_law(const SceneReader& in, const ToolAccepts& accepts) {
       if (accepts.filtered_drag) return law;
       in.fail_value("fluid", "drag",
                     "a filtered drag model belongs to coarse-grid runs (cgd-coarse); this tool runs resolved "
-                    "simulations, which take a microscopic law: " + quoted_names(microscopic));
+                    "simulations, which take a microscopic law: " +
+                        quoted_names(microscopic));
     }
   std::vector<DragLaw> offered = microscopic;
   if (accepts.filtered_drag) offered.insert(offered.end(), filtered.begin(), filtered.end());
@@ -938,7 +946,8 @@ Scene build_scene(const SceneReader& in, const ToolAccepts& accepts) {
 
   // run times, possibly in units of t_ref; one rule per key: the end time > 0, the intervals and the
   // start of the sampling window >= 0
-  const auto time_key = [&](const char* seconds_key, const char* tref_key, bool positive) -> std::optional<double> {
+  const auto time_key = [&](const char* seconds_key, const char* tref_key,
+                            bool positive) -> std::optional<double> {
     const bool has_t = in.has("run", tref_key);
     const char* key = has_t ? tref_key : seconds_key;
     const auto given = in.number("run", key);
@@ -1073,7 +1082,8 @@ Scene load_scene_from_string(const std::string& toml_text, const std::string& or
   return scene;
 }
 
-Scene load_scene(const std::string& path, const std::vector<std::string>& overrides, const ToolAccepts& accepts) {
+Scene load_scene(const std::string& path, const std::vector<std::string>& overrides,
+                 const ToolAccepts& accepts) {
   return load_scene_from_string(read_file(path), path, overrides, accepts);
 }
 

@@ -90,7 +90,8 @@ std::vector<Field> group_fields(hid_t file, const char* group, const std::string
   H5Gget_info(g, &info);
   for (hsize_t i = 0; i < info.nlinks; ++i) {
     char name[256];
-    if (H5Lget_name_by_idx(g, ".", H5_INDEX_NAME, H5_ITER_INC, i, name, sizeof name, H5P_DEFAULT) < 0) continue;
+    if (H5Lget_name_by_idx(g, ".", H5_INDEX_NAME, H5_ITER_INC, i, name, sizeof name, H5P_DEFAULT) < 0)
+      continue;
     const hid_t d = H5Dopen2(g, name, H5P_DEFAULT);
     if (d < 0) continue;  // a subgroup: no field
     Field f{name, {}, false};
@@ -113,7 +114,8 @@ const SnapshotFields& snapshot_fields(const std::string& path) {
   static std::map<std::string, std::pair<std::filesystem::file_time_type, SnapshotFields>> cache;
   std::error_code ec;
   const auto written = std::filesystem::last_write_time(path, ec);
-  if (ec) throw RunError(path + ": cannot read the snapshot to list its fields for run.xmf (" + ec.message() + ")");
+  if (ec)
+    throw RunError(path + ": cannot read the snapshot to list its fields for run.xmf (" + ec.message() + ")");
   auto it = cache.find(path);
   if (it != cache.end() && it->second.first == written) return it->second.second;
   h5::File file = h5::File::open_read(path, MPI_COMM_SELF);
@@ -129,15 +131,17 @@ std::string dims_text(const std::vector<hsize_t>& dims) {
 }
 
 /// One attribute per field: Vector when the last axis has 3 components beyond the grid's axes.
-void attributes(std::ostringstream& x, const std::vector<Field>& fields, const std::string& h5, const char* group,
-                std::size_t grid_rank, const char* center, const std::string& indent) {
+void attributes(std::ostringstream& x, const std::vector<Field>& fields, const std::string& h5,
+                const char* group, std::size_t grid_rank, const char* center, const std::string& indent) {
   for (const Field& f : fields) {
     if (std::string_view(group) == "/particles" && f.name == "position") continue;  // the geometry
     const bool vector = f.dims.size() == grid_rank + 1 && f.dims.back() == 3;
-    if (f.dims.size() != grid_rank && !vector) continue;  // no such field in the schema; XDMF could not show it
-    x << indent << "  <Attribute Name=\"" << xml_escape(f.name) << "\" AttributeType=\"" << (vector ? "Vector" : "Scalar")
-      << "\" Center=\"" << center << "\">\n"
-      << indent << "    " << hdf_item(dims_text(f.dims), h5, std::string(group) + "/" + f.name, f.integer ? "Int" : "Float")
+    if (f.dims.size() != grid_rank && !vector)
+      continue;  // no such field in the schema; XDMF could not show it
+    x << indent << "  <Attribute Name=\"" << xml_escape(f.name) << "\" AttributeType=\""
+      << (vector ? "Vector" : "Scalar") << "\" Center=\"" << center << "\">\n"
+      << indent << "    "
+      << hdf_item(dims_text(f.dims), h5, std::string(group) + "/" + f.name, f.integer ? "Int" : "Float")
       << "\n"
       << indent << "  </Attribute>\n";
   }
@@ -191,7 +195,8 @@ void write_xdmf(const std::string& run_dir, const std::vector<XdmfFrame>& frames
     const XdmfFrame& fr = frames[i];
     x << "      <Grid Name=\"frame_" << i << "\" GridType=\"Collection\" CollectionType=\"Spatial\">\n"
       << "        <Time Value=\"" << number(fr.time_s) << "\"/>\n";
-    const SnapshotFields& fields = snapshot_fields((std::filesystem::path(run_dir) / fr.snapshot_file).string());
+    const SnapshotFields& fields =
+        snapshot_fields((std::filesystem::path(run_dir) / fr.snapshot_file).string());
     if (fr.particle_count > 0) particles_grid(x, fr, fields);  // an empty polyvertex grid upsets the readers
     if (fr.has_fluid) fluid_grid(x, fr, fields);
     x << "      </Grid>\n";

@@ -334,8 +334,8 @@ std::vector<BadInput> bad_inputs() {
       {"RejectsGammaStarTogetherWithStiffness",
        replaced(wet, "gamma_star = 1e-3", "gamma_star = 1e-3\nstiffness = 1.27"),
        {},
-       {"contact.gamma_star = 0.001 and contact.stiffness = 1.27", "give either contact.gamma_star", "not both",
-        "delete one", "--set contact.gamma_star=VALUE replaces contact.stiffness"}},
+       {"contact.gamma_star = 0.001 and contact.stiffness = 1.27", "give either contact.gamma_star",
+        "not both", "delete one", "--set contact.gamma_star=VALUE replaces contact.stiffness"}},
       {"RejectsGammaStarWithoutFluid",
        replaced(dry, "stiffness = 1.27", "gamma_star = 1e-3"),
        {},
@@ -355,8 +355,9 @@ std::vector<BadInput> bad_inputs() {
       {"RejectsEndTimeGivenTwice",
        replaced(wet, "end_time = 0.05", "end_time = 0.05\nend_time_tref = 2.0"),
        {},
-       {"run.end_time = 0.05 and run.end_time_tref = 2.0", "run.end_time (s) or run.end_time_tref (units of t_ref",
-        "not both", "--set run.end_time=VALUE replaces run.end_time_tref"}},
+       {"run.end_time = 0.05 and run.end_time_tref = 2.0",
+        "run.end_time (s) or run.end_time_tref (units of t_ref", "not both",
+        "--set run.end_time=VALUE replaces run.end_time_tref"}},
       {"RejectsBoxSizeGivenTwice",
        replaced(wet, "size_dp = [24, 96, 24]", "size_dp = [24, 96, 24]\nsize = [1e-3, 1e-3, 1e-3]"),
        {},
@@ -386,7 +387,8 @@ std::vector<BadInput> bad_inputs() {
       {"ResolvedRunsOfferOnlyMicroscopicLaws",
        replaced(wet, "drag = \"stokes\"", "drag = \"wenyu\""),
        {},
-       {"must be one of \"beetstra\", \"wen-yu\", \"stokes\" (microscopic drag law;", "did you mean \"wen-yu\"?"},
+       {"must be one of \"beetstra\", \"wen-yu\", \"stokes\" (microscopic drag law;",
+        "did you mean \"wen-yu\"?"},
        cgd::kResolvedRunAccepts},
       {"RejectsExplicitTimeStepWithContacts",
        replaced(wet, "end_time = 0.05", "end_time = 0.05\ndt = 1e-6"),
@@ -668,7 +670,8 @@ TEST(SceneOverrides, EffectiveTomlHoldsTheOverridesAndReloadsToTheSameScene) {
 // Issue 11, item 3: each pair of keys that gives one quantity two ways can be switched from the command
 // line: a --set of one key replaces the other in the file, and the effective scene holds only the new one.
 TEST(SceneOverrides, SetSwitchesEveryAlternative) {
-  const std::string two_way = replaced(kWetScene, "coupling = \"quiescent\"", "coupling = \"two-way\"\ncells = [8, 32, 8]");
+  const std::string two_way =
+      replaced(kWetScene, "coupling = \"quiescent\"", "coupling = \"two-way\"\ncells = [8, 32, 8]");
   struct Switch {
     std::string scene, set, replaced_line;
   };
@@ -679,7 +682,8 @@ TEST(SceneOverrides, SetSwitchesEveryAlternative) {
       {two_way + "series_interval = 0.001\n", "run.series_interval_tref=0.1", "series_interval = "},
       {two_way + "sampling_start_tref = 1.0\n", "run.sampling_start=0.002", "sampling_start_tref = "},
       {two_way, "fluid.dx_over_dp=4", "cells = "},
-      {replaced(two_way, "cells = [8, 32, 8]", "dx_over_dp = 3.0"), "fluid.cells=[6, 24, 6]", "dx_over_dp = "},
+      {replaced(two_way, "cells = [8, 32, 8]", "dx_over_dp = 3.0"), "fluid.cells=[6, 24, 6]",
+       "dx_over_dp = "},
       {two_way, "domain.size=[2e-3, 8e-3, 2e-3]", "size_dp = "},
       {two_way, "contact.stiffness=1.27", "gamma_star = "},
       {replaced(two_way, "gamma_star = 1e-3", "stiffness = 1.27"), "contact.gamma_star=1e-3", "stiffness = "},
@@ -702,7 +706,8 @@ TEST(SceneOverrides, SetSwitchesEveryAlternative) {
   const auto cells = load_scene_from_string(two_way, "scene.toml", {"fluid.dx_over_dp=4"});
   EXPECT_EQ(cells.fluid->cells, (std::array<int, 3>{6, 24, 6}));
   // two --set of one pair: the later wins, as for one key given twice
-  const auto later = load_scene_from_string(two_way, "scene.toml", {"run.end_time_tref=2", "run.end_time=0.02"});
+  const auto later =
+      load_scene_from_string(two_way, "scene.toml", {"run.end_time_tref=2", "run.end_time=0.02"});
   EXPECT_DOUBLE_EQ(later.run.end_time_s, 0.02);
 }
 
@@ -720,17 +725,21 @@ TEST(SceneValidation, ListsEveryUnknownAndMisplacedKeyAtOnce) {
     for (const char* expected :
          {"scene.toml: 4 problems:", "unknown key particles.diamter; did you mean particles.diameter?",
           "unknown key particles.end_time_tref; did you mean run.end_time_tref?",
-          "unknown key fluid.seed; did you mean particles.seed?", "contact.friction = \"high\": must be a number",
-          "(keys of [particles]: diameter,", "(keys of [fluid]: density,"})
-      EXPECT_NE(message.find(expected), std::string::npos) << "expected \"" << expected << "\" in: " << message;
+          "unknown key fluid.seed; did you mean particles.seed?",
+          "contact.friction = \"high\": must be a number", "(keys of [particles]: diameter,",
+          "(keys of [fluid]: density,"})
+      EXPECT_NE(message.find(expected), std::string::npos)
+          << "expected \"" << expected << "\" in: " << message;
     const auto first = message.find("keys of [particles]");
-    EXPECT_EQ(message.find("keys of [particles]", first + 1), std::string::npos) << "each key list once: " << message;
+    EXPECT_EQ(message.find("keys of [particles]", first + 1), std::string::npos)
+        << "each key list once: " << message;
   }
 }
 
 // Issue 11, item 4: one rule per key. A value on either side of the allowed range gets the same rule.
 TEST(SceneValidation, BothSidesOfARangeStateTheSameRule) {
-  const std::string two_way = replaced(kWetScene, "coupling = \"quiescent\"", "coupling = \"two-way\"\ncells = [8, 32, 8]");
+  const std::string two_way =
+      replaced(kWetScene, "coupling = \"quiescent\"", "coupling = \"two-way\"\ncells = [8, 32, 8]");
   struct Sides {
     std::string key;
     std::string low, high;  // overrides below and above the allowed range

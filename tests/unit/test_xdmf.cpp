@@ -151,7 +151,8 @@ TEST_F(XdmfTest, EveryParticleAndFluidDatasetOfACoupledSnapshotIsInRunXmf) {
     EXPECT_EQ(particle_sets.size(), 8u) << "the test snapshot holds every per-particle array of the schema";
     EXPECT_EQ(fluid_sets.size(), 4u) << "and every fluid field, eps_velocity included";
     for (const auto& name : particle_sets)
-      EXPECT_NE(xmf.find(std::string(file) + ":/particles/" + name), std::string::npos) << file << " " << name;
+      EXPECT_NE(xmf.find(std::string(file) + ":/particles/" + name), std::string::npos)
+          << file << " " << name;
     for (const auto& name : fluid_sets)
       EXPECT_NE(xmf.find(std::string(file) + ":/fluid/" + name), std::string::npos) << file << " " << name;
   }
@@ -170,7 +171,8 @@ TEST_F(XdmfTest, DryRunListsOnlyTheDatasetsItsSnapshotsHold) {
   const std::string xmf = write_run("dry", /*coupled=*/false);
   for (const char* present : {"/particles/velocity", "/particles/diameter", "/particles/id"})
     EXPECT_NE(xmf.find(present), std::string::npos) << present;
-  for (const char* absent : {"drag_coefficient", "fluid_velocity", "angular_velocity", "/fluid/", "3DCoRectMesh"})
+  for (const char* absent :
+       {"drag_coefficient", "fluid_velocity", "angular_velocity", "/fluid/", "3DCoRectMesh"})
     EXPECT_EQ(xmf.find(absent), std::string::npos) << absent << " is not in a dry snapshot";
 }
 
