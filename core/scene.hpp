@@ -1,5 +1,5 @@
 #pragma once
-// Scene: what to simulate, as plain validated config structs (the keys and their rules: core/scene.cpp).
+// Scene: what to simulate, as plain validated config structs (every key: docs/scene-keys.md).
 // core/scene.cpp is the only place that sees the TOML parser; physics code receives these structs.
 // SI units everywhere; the unit is in the name or the comment of every field.
 #include <array>

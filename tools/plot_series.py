@@ -10,7 +10,8 @@ For each run directory (or series.h5 file) it reads series.h5 and plots, against
                       whole-box filter of docs/models.md "Filtering"), positive when the fluid moves up
                       relative to the particles. u_ref is
                         - coupled runs (one-way, two-way): u_t of Schiller-Naumann, the convention of
-                          the paper and of docs/models.md "Drag laws" (/params u_t_m_s), whatever the law;
+                          the paper and of docs/models.md "Reference scales" (/params u_t_m_s), whatever
+                          the law;
                         - quiescent runs (a fluid at rest, drag only): the single-particle terminal
                           velocity of the scene's own drag law (fluid.drag; buoyancy only with
                           fluid.pressure_gradient_force), the speed each particle relaxes to, so the curve
