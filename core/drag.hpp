@@ -1,14 +1,14 @@
 #pragma once
-// Microscopic drag laws (models.md, "Microscopic drag laws") as evaluators: each is a small struct
+// Microscopic drag laws (docs/models.md, "Drag laws") as evaluators: each is a small struct
 // built from its parameters with two inline, non-virtual methods,
 //   reynolds(phi, slip_speed)  particle Reynolds number of the law (dimensionless),
 //   beta_p(phi, slip_speed)    per-particle drag coefficient, kg m^-3 s^-1,
-// in the per-particle convention of models.md (the paper's eq. 3):
+// in the per-particle convention of docs/models.md (the paper's eq. 3):
 //   F_d,i = V_p beta_p,i (u_i - v_i),   eps = 1 - phi,   two-fluid beta = phi beta_p.
 // phi is the solids volume fraction at the particle (0 <= phi < 1); slip_speed = |u - v| in m/s
 // (its sign is ignored). The same evaluator serves the generator, the filter's normalisation and
 // the coarse runner; hot loops choose the law once with visit_drag_law and call the evaluator
-// inline. For parcels, beta_p is evaluated with the primary diameter (models.md, "Parcels").
+// inline. For parcels, beta_p is evaluated with the primary diameter (docs/models.md, "Parcels").
 #include <cmath>
 #include <functional>
 #include <optional>
@@ -49,7 +49,7 @@ struct StokesDrag {
 ///   Re = rho_f d |u - v| / mu_f,   C_d = 24/Re (1 + 0.15 Re^0.687),
 ///   beta_p = (3/4) C_d rho_f |u - v| / d = 18 mu_f / d^2 (1 + 0.15 Re^0.687),
 /// independent of phi; fitted for Re <~ 800 (no Newton-regime cap). This is the law of the
-/// reference terminal velocity u_t (models.md, core/scales.hpp).
+/// reference terminal velocity u_t (docs/models.md, core/scales.hpp).
 struct SchillerNaumannDrag {
   using Params = DragParams;
   Params params;
@@ -68,7 +68,7 @@ struct SchillerNaumannDrag {
   double stokes_beta_;  // 18 mu_f / d^2, kg m^-3 s^-1
 };
 
-/// Wen & Yu (1966, Chem. Eng. Prog. Symp. Ser. 62:100), as written in models.md:
+/// Wen & Yu (1966, Chem. Eng. Prog. Symp. Ser. 62:100), as written in docs/models.md:
 ///   Re = eps rho_f d |u - v| / mu_f,
 ///   C_d = 24/Re (1 + 0.15 Re^0.687) for Re <= 1000, else 0.44,
 ///   beta_p = (3/4) C_d rho_f eps |u - v| eps^-2.65 / d.
@@ -101,7 +101,7 @@ struct WenYuDrag {
   double re_per_slip_;  // rho_f d / mu_f, s/m
 };
 
-/// Beetstra, van der Hoef & Kuipers (2007, AIChE J. 53:489), monodisperse, as written in models.md:
+/// Beetstra, van der Hoef & Kuipers (2007, AIChE J. 53:489), monodisperse, as written in docs/models.md:
 ///   Re = eps rho_f d |u - v| / mu_f,
 ///   F(phi, Re) = 10 phi/eps^2 + eps^2 (1 + 1.5 sqrt(phi))
 ///              + [0.413 Re / (24 eps^2)] (1/eps + 3 eps phi + 8.4 Re^-0.343)
@@ -182,7 +182,7 @@ double settling_slip_speed(const std::function<double(double)>& beta_p_of_slip, 
                            double phi, double rho_p, double g);
 }  // namespace detail
 
-/// Homogeneous (unclustered) settling slip speed, m/s: the solution w of the balance of models.md
+/// Homogeneous (unclustered) settling slip speed, m/s: the solution w of the balance of docs/models.md
 ///   V_p eps (rho_p - rho_f) g = F_d = V_p beta_p(phi, w) w,
 /// g = |gravity| in m/s^2. beta_p(phi, w) w increases with w for every law here, so the root is
 /// unique; it is bracketed by [0, eps (rho_p - rho_f) g / beta_p(phi, 0)] and found with GSL's Brent
@@ -193,14 +193,14 @@ double homogeneous_slip_speed(const Law& law, double phi, double rho_p, double g
 }
 double homogeneous_slip_speed(DragLaw law, const DragParams& params, double phi, double rho_p, double g);
 
-/// homogeneous_slip_speed(law, params, phi, rho_p, g) / u_t (u_t in m/s; models.md's convention is the
+/// homogeneous_slip_speed(law, params, phi, rho_p, g) / u_t (u_t in m/s; docs/models.md's convention is the
 /// Schiller-Naumann u_t of core/scales.hpp).
 double homogeneous_slip_over_ut(DragLaw law, const DragParams& params, double phi, double rho_p, double g,
                                 double u_t);
 
 /// Terminal velocity of a single particle (phi = 0), m/s: (rho_p - rho_f) g = beta_p(0, u) u.
 /// terminal_velocity(SchillerNaumannDrag(p), ...) and terminal_velocity(DragLaw::WenYu, p, ...) are
-/// models.md's u_t (core/scales.hpp); Beetstra gives 0.232 m/s for the paper's case.
+/// docs/models.md's u_t (core/scales.hpp); Beetstra gives 0.232 m/s for the paper's case.
 template <class Law>
 double terminal_velocity(const Law& law, double rho_p, double g) {
   return homogeneous_slip_speed(law, 0.0, rho_p, g);

@@ -1,14 +1,16 @@
-// Scene loading, --set overrides, validation and derived numbers (design.md "Scenes", models.md).
+// Scene loading, --set overrides, validation and derived numbers (the formulas: docs/models.md).
 // The only file that sees the TOML parser: everything after load_scene works on plain structs.
 //
 // Steps of load_scene_from_string:
 //   1. parse the text (a syntax error names the line and column);
-//   2. apply the --set overrides in order (each is section.key=value, the value read as TOML);
+//   2. apply the --set overrides in order (each is section.key=value, the value read as TOML; a key
+//      with an alternative, e.g. run.end_time / run.end_time_tref, replaces the other: alternatives());
 //   3. check the structure against the schema below: known sections and keys (did-you-mean on a
-//      typo), value types, array lengths;
-//   4. read every key into the config structs with its range check;
-//   5. cross-key rules (alternatives given twice, keys that need a [fluid] section, ...) and the
-//      derived numbers of models.md;
+//      typo, the right section for a misplaced key), value types, array lengths, alternatives given
+//      twice; every problem found is listed in one error;
+//   4. read every key into the config structs with its range check (one rule per key);
+//   5. cross-key rules (keys that need a [fluid] section, ...), the tool's refusals (ToolAccepts) and
+//      the derived numbers of docs/models.md;
 //   6. print the effective scene (after overrides) as TOML text.
 // Every error is an InputError: "<file>: <section.key> = <value given>: <what is allowed>".
 #include "core/scene.hpp"
@@ -101,7 +103,7 @@ const std::vector<SectionSpec>& schema() {
         {"seed", Kind::Integer, "seed of the random placement and velocities"}}},
       {"contact",
        {{"model", Kind::String, "contact law"},
-        {"gamma_star", Kind::Number, "dimensionless stiffness (models.md)"},
+        {"gamma_star", Kind::Number, "dimensionless stiffness (docs/models.md, \"Contact law\")"},
         {"stiffness", Kind::Number, "N/m, normal spring stiffness of two primaries"},
         {"t_star", Kind::Number, "dt_DEM / t_c"},
         {"restitution", Kind::Number, "normal coefficient of restitution"},
@@ -120,7 +122,8 @@ const std::vector<SectionSpec>& schema() {
         {"drag_model", Kind::String, "path of the drag model file (cgd-fit) used by drag = \"model\""},
         {"drag_model_checksum", Kind::String, "FNV-1a checksum of fluid.drag_model (recorded by cgd)"},
         {"pressure_gradient_force", Kind::Boolean, "apply -V_p grad p to the particles"},
-        {"parcel_correction", Kind::Boolean, "apply c_corr(alpha) of a filtered law (false: the parcel fit's runs)"}}},
+        {"parcel_correction", Kind::Boolean,
+         "apply c_corr(alpha) of a filtered law (false: the parcel fit's runs)"}}},
       {"run",
        {{"end_time", Kind::Number, "s, simulated time"},
         {"end_time_tref", Kind::Number, "simulated time in units of t_ref = u_t/g"},
@@ -130,7 +133,8 @@ const std::vector<SectionSpec>& schema() {
         {"series_interval_tref", Kind::Number, "time-series interval in units of t_ref = u_t/g"},
         {"checkpoint_wall_s", Kind::Number, "wall-clock seconds between checkpoints"},
         {"sampling_start", Kind::Number, "s, start of the window of time averages (after the transient)"},
-        {"sampling_start_tref", Kind::Number, "start of the window of time averages in units of t_ref = u_t/g"},
+        {"sampling_start_tref", Kind::Number,
+         "start of the window of time averages in units of t_ref = u_t/g"},
         {"dt", Kind::Number, "s, explicit DEM time step"}}},
       {"numerics",
        {{"void_fraction_floor", Kind::Number, "smallest void fraction the fluid sees (conservative floor)"},
@@ -160,6 +164,42 @@ const KeySpec& key_spec(std::string_view section, std::string_view key) {
   const KeySpec* k = s ? find_key(*s, key) : nullptr;
   if (!k) throw std::logic_error("scene schema has no key " + std::string(section) + "." + std::string(key));
   return *k;
+}
+
+// ---- alternatives --------------------------------------------------------------------------------
+
+/// Two keys that give one quantity in two ways (e.g. a time in s or in units of t_ref). A scene file
+/// gives at most one of them; a --set of either replaces the other (any key can be overridden from the
+/// command line, whichever of the pair the file uses).
+struct Alternative {
+  const char* section;
+  const char* first;  // the key named first in messages
+  const char* second;
+  const char* first_unit;  // how each gives the quantity, quoted in messages
+  const char* second_unit;
+};
+
+const std::vector<Alternative>& alternatives() {
+  static const std::vector<Alternative> pairs = {
+      {"domain", "size_dp", "size", "primary diameters", "m"},
+      {"contact", "gamma_star", "stiffness", "dimensionless", "N/m"},
+      {"fluid", "cells", "dx_over_dp", "cell counts", "cell size in primary diameters"},
+      {"run", "end_time", "end_time_tref", "s", "units of t_ref = u_t/g"},
+      {"run", "dump_interval", "dump_interval_tref", "s", "units of t_ref = u_t/g"},
+      {"run", "series_interval", "series_interval_tref", "s", "units of t_ref = u_t/g"},
+      {"run", "sampling_start", "sampling_start_tref", "s", "units of t_ref = u_t/g"},
+  };
+  return pairs;
+}
+
+/// The other key of the pair `section.key` belongs to, if it belongs to one.
+const char* alternative_of(std::string_view section, std::string_view key) {
+  for (const auto& a : alternatives())
+    if (section == a.section) {
+      if (key == a.first) return a.second;
+      if (key == a.second) return a.first;
+    }
+  return nullptr;
 }
 
 // ---- did-you-mean --------------------------------------------------------------------------------
@@ -212,24 +252,32 @@ std::vector<std::string> key_names(const SectionSpec& section) {
   return names;
 }
 
+std::string section_key_list(const SectionSpec& section) {
+  return "keys of [" + std::string(section.name) + "]: " + join(key_names(section), ", ");
+}
+
 std::string unknown_section_message(std::string_view given) {
   std::string msg = "unknown section [" + std::string(given) + "]";
   if (auto near = closest(given, section_names())) msg += "; did you mean [" + *near + "]?";
   return msg + " (sections: " + join(section_names(), ", ") + ")";
 }
 
-std::string unknown_key_message(const SectionSpec& section, std::string_view given) {
+/// "unknown key section.key; did you mean ...?" A key that exists in another section is taken as
+/// misplaced before a near name in its own section is offered as a typo. With `with_key_list`, the
+/// keys of the section follow (a message listing several problems lists them once, at its end).
+std::string unknown_key_message(const SectionSpec& section, std::string_view given,
+                                bool with_key_list = true) {
   std::string msg = "unknown key " + std::string(section.name) + "." + std::string(given);
-  if (auto near = closest(given, key_names(section))) {
+  const SectionSpec* home = nullptr;
+  for (const auto& other : schema())
+    if (&other != &section && find_key(other, given)) home = &other;
+  if (home) {
+    msg += "; did you mean " + std::string(home->name) + "." + std::string(given) + "?";
+  } else if (auto near = closest(given, key_names(section))) {
     msg += "; did you mean " + std::string(section.name) + "." + *near + "?";
-  } else {
-    for (const auto& other : schema())  // a key put in the wrong section
-      if (&other != &section && find_key(other, given)) {
-        msg += "; did you mean " + std::string(other.name) + "." + std::string(given) + "?";
-        break;
-      }
   }
-  return msg + " (keys of [" + section.name + "]: " + join(key_names(section), ", ") + ")";
+  if (with_key_list) msg += " (" + section_key_list(section) + ")";
+  return msg;
 }
 
 // ---- printing values (messages and the effective scene) -------------------------------------------
@@ -367,6 +415,23 @@ bool has_kind(const toml::node& node, Kind kind) {
   return false;
 }
 
+/// What a value of the wrong type breaks: the kind the key takes, the offending array element, its meaning.
+std::string type_rule(const KeySpec& spec, const toml::node& value) {
+  std::string rule = "must be " + kind_text(spec.kind);
+  if (spec.kind == Kind::Number && value.is_floating_point()) rule = "must be a finite number";
+  if (const auto* a = value.as_array(); a && a->size() != 3) {
+    rule += ", got " + std::to_string(a->size()) + " element" + (a->size() == 1 ? "" : "s");
+  } else if (a) {
+    for (std::size_t i = 0; i < a->size(); ++i)
+      if (!has_kind(*a->get(i), spec.kind == Kind::Vec3Integer ? Kind::Integer : Kind::Number)) {
+        rule += "; element " + std::to_string(i + 1) + " (" + format_node(*a->get(i)) + ") is not " +
+                (spec.kind == Kind::Vec3Integer ? "an integer" : "a finite number");
+        break;
+      }
+  }
+  return rule + " (" + spec.meaning + ")";
+}
+
 /// Reads validated values out of the (overridden) root table and words every error.
 class SceneReader {
  public:
@@ -378,11 +443,27 @@ class SceneReader {
   /// "file: section.key = value (from --set): rule"
   [[noreturn]] void fail_value(std::string_view section, std::string_view key,
                                const std::string& rule) const {
+    fail(value_message(section, key, rule));
+  }
+
+  /// "section.key = value (from --set): rule"
+  std::string value_message(std::string_view section, std::string_view key, const std::string& rule) const {
     const std::string name = std::string(section) + "." + std::string(key);
     const toml::node* n = node(section, key);
     std::string message = name + " = " + (n ? format_node(*n) : std::string("?"));
     if (overridden_.count(name)) message += " (from --set)";
-    fail(message + ": " + rule);
+    return message + ": " + rule;
+  }
+
+  /// Both keys of an alternative pair in the scene: which to keep, and how --set chooses one.
+  std::string conflict_message(const Alternative& pair) const {
+    const std::string section = pair.section;
+    const std::string first = section + "." + pair.first, second = section + "." + pair.second;
+    return first + " = " + format_node(*node(section, pair.first)) + " and " + second + " = " +
+           format_node(*node(section, pair.second)) + ": give either " + first + " (" + pair.first_unit +
+           ") or " + second + " (" + pair.second_unit +
+           "), not both: delete one of them from the scene (on the command line, --set " + first +
+           "=VALUE replaces " + second + ", and the other way round)";
   }
 
   const toml::node* node(std::string_view section, std::string_view key) const {
@@ -392,15 +473,20 @@ class SceneReader {
   bool has(std::string_view section, std::string_view key) const { return node(section, key) != nullptr; }
   bool has_section(std::string_view section) const { return root_[section].as_table() != nullptr; }
 
-  /// Unknown sections and keys, wrong types and array lengths.
+  /// Unknown, misplaced and mistyped keys (wrong types, array lengths) and alternatives given twice
+  /// (alternatives()), all of them in one InputError: a scene with three misplaced keys is fixed in one go.
   void check_structure() const {
+    std::vector<std::string> problems;
+    std::vector<const SectionSpec*> sections_with_unknown_keys;  // their key lists close the message
     for (const auto& [section_key, section_node] : root_) {
       const std::string_view section_name = section_key.str();
       const SectionSpec* section = find_section(section_name);
       if (!section_node.is_table()) {
-        if (section)
-          fail(std::string(section_name) + " = " + format_node(section_node) + ": must be a section [" +
-               std::string(section_name) + "]");
+        if (section) {
+          problems.push_back(std::string(section_name) + " = " + format_node(section_node) +
+                             ": must be a section [" + std::string(section_name) + "]");
+          continue;
+        }
         // a bare key at the top level: perhaps a key that belongs in a section
         std::string message = "unknown top-level key " + std::string(section_name);
         for (const auto& s : schema())
@@ -409,29 +495,42 @@ class SceneReader {
                        s.name + "])?";
             break;
           }
-        fail(message + " (every key belongs in a section: " + join(section_names(), ", ") + ")");
+        problems.push_back(message + " (every key belongs in a section: " + join(section_names(), ", ") +
+                           ")");
+        continue;
       }
-      if (!section) fail(unknown_section_message(section_name));
+      if (!section) {
+        problems.push_back(unknown_section_message(section_name));
+        continue;
+      }
       for (const auto& [key, value] : *section_node.as_table()) {
         const KeySpec* spec = find_key(*section, key.str());
-        if (!spec) fail(unknown_key_message(*section, key.str()));
-        if (!has_kind(value, spec->kind)) {
-          std::string rule = "must be " + kind_text(spec->kind);
-          if (spec->kind == Kind::Number && value.is_floating_point()) rule = "must be a finite number";
-          if (const auto* a = value.as_array(); a && a->size() != 3) {
-            rule += ", got " + std::to_string(a->size()) + " element" + (a->size() == 1 ? "" : "s");
-          } else if (a) {
-            for (std::size_t i = 0; i < a->size(); ++i)
-              if (!has_kind(*a->get(i), spec->kind == Kind::Vec3Integer ? Kind::Integer : Kind::Number)) {
-                rule += "; element " + std::to_string(i + 1) + " (" + format_node(*a->get(i)) + ") is not " +
-                        (spec->kind == Kind::Vec3Integer ? "an integer" : "a finite number");
-                break;
-              }
-          }
-          fail_value(section->name, key.str(), rule + " (" + spec->meaning + ")");
+        if (!spec) {
+          problems.push_back(unknown_key_message(*section, key.str(), false));
+          if (std::find(sections_with_unknown_keys.begin(), sections_with_unknown_keys.end(), section) ==
+              sections_with_unknown_keys.end())
+            sections_with_unknown_keys.push_back(section);
+          continue;
         }
+        if (!has_kind(value, spec->kind))
+          problems.push_back(value_message(section->name, key.str(), type_rule(*spec, value)));
       }
+      for (const auto& pair : alternatives())
+        if (section_name == pair.section && has(pair.section, pair.first) && has(pair.section, pair.second))
+          problems.push_back(conflict_message(pair));
     }
+    if (problems.empty()) return;
+    if (problems.size() == 1) {
+      std::string message = problems.front();
+      if (!sections_with_unknown_keys.empty())
+        message += " (" + section_key_list(*sections_with_unknown_keys.front()) + ")";
+      fail(message);
+    }
+    std::string message = std::to_string(problems.size()) + " problems:";
+    for (const auto& problem : problems) message += "\n  " + problem;
+    for (const SectionSpec* section : sections_with_unknown_keys)
+      message += "\n  (" + section_key_list(*section) + ")";
+    fail(message);
   }
 
   std::optional<double> number(std::string_view section, std::string_view key) const {
@@ -589,6 +688,8 @@ std::string apply_override(toml::table& root, const std::string& text, const std
     table->insert_or_assign(key_name, parsed["value"]);
   else
     table->insert_or_assign(key_name, value_text);
+  // One quantity, two ways to give it (alternatives()): the key set here replaces the other one.
+  if (const char* other = alternative_of(section_name, key_name)) table->erase(other);
   return name;
 }
 
@@ -598,7 +699,43 @@ double norm(const Vec3& v) {
   return std::sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
 }
 
-Scene build_scene(const SceneReader& in) {
+/// fluid.drag: the laws the tool accepts. The microscopic laws serve every run; the filtered laws
+/// (radl2014, model) belong to coarse-grid runs, and a tool that refuses them (cgd-generate) neither
+/// offers them nor accepts them.
+DragLaw drag_law(const SceneReader& in, const ToolAccepts& accepts) {
+  const auto given = in.string("fluid", "drag");
+  if (!given) return FluidConfig{}.drag;
+  const std::vector<DragLaw> microscopic = {DragLaw::Beetstra, DragLaw::WenYu, DragLaw::Stokes};
+  const std::vector<DragLaw> filtered = {DragLaw::Radl2014, DragLaw::Model};
+  const auto quoted_names = [](const std::vector<DragLaw>& laws) {
+    std::vector<std::string> names;
+    for (const DragLaw law : laws) names.push_back(quote(to_string(law)));
+    return join(names, ", ");
+  };
+  for (const DragLaw law : microscopic)
+    if (*given == to_string(law)) return law;
+  for (const DragLaw law : filtered)
+    if (*given == to_string(law)) {
+      if (accepts.filtered_drag) return law;
+      in.fail_value("fluid", "drag",
+                    "a filtered drag model belongs to coarse-grid runs (cgd-coarse); this tool runs resolved "
+                    "simulations, which take a microscopic law: " +
+                        quoted_names(microscopic));
+    }
+  std::vector<DragLaw> offered = microscopic;
+  if (accepts.filtered_drag) offered.insert(offered.end(), filtered.begin(), filtered.end());
+  std::vector<std::string> names;
+  for (const DragLaw law : offered) names.emplace_back(to_string(law));
+  std::string rule = "must be one of " + quoted_names(offered);
+  rule += accepts.filtered_drag
+              ? " (" + quoted_names(microscopic) + ": microscopic laws; " + quoted_names(filtered) +
+                    ": filtered laws of coarse-grid runs, \"model\" with fluid.drag_model = PATH)"
+              : " (microscopic drag law; the filtered laws belong to coarse-grid runs, cgd-coarse)";
+  if (auto near = closest(*given, names)) rule += "; did you mean " + quote(*near) + "?";
+  in.fail_value("fluid", "drag", rule);
+}
+
+Scene build_scene(const SceneReader& in, const ToolAccepts& accepts) {
   Scene s;
 
   // [particles]
@@ -625,9 +762,6 @@ Scene build_scene(const SceneReader& in) {
 
   // [domain]
   const bool has_size_dp = in.has("domain", "size_dp"), has_size = in.has("domain", "size");
-  if (has_size_dp && has_size)
-    in.fail_value("domain", "size",
-                  "give either domain.size (m) or domain.size_dp (primary diameters), not both");
   if (!has_size_dp && !has_size)
     in.fail(
         "domain.size_dp is missing: required, the box edges [x, y, z] in primary diameters (or domain.size "
@@ -666,9 +800,6 @@ Scene build_scene(const SceneReader& in) {
     c.gamman_over_gammat = in.positive("contact", "gamman_over_gammat", *v);
   if (auto v = in.number("contact", "skin_over_dp"))
     c.skin_over_dp = in.non_negative("contact", "skin_over_dp", *v);
-  if (c.gamma_star && c.stiffness_n_N_m)
-    in.fail_value("contact", "stiffness",
-                  "give either contact.gamma_star or contact.stiffness (N/m), not both");
   if (c.model != ContactModel::None && !c.gamma_star && !c.stiffness_n_N_m)
     in.fail(std::string("contact.stiffness is missing: with contact.model = \"") + to_string(c.model) +
             "\" give contact.stiffness (N/m) or contact.gamma_star (dimensionless, needs a [fluid] section)");
@@ -676,11 +807,11 @@ Scene build_scene(const SceneReader& in) {
   // [fluid]
   if (in.has_section("fluid")) {
     FluidConfig f;
-    if (auto v = in.number("fluid", "density")) f.density_kg_m3 = in.positive("fluid", "density", *v);
-    if (!(f.density_kg_m3 < p.density_kg_m3))
+    if (auto v = in.number("fluid", "density")) f.density_kg_m3 = *v;
+    if (!(f.density_kg_m3 > 0.0 && f.density_kg_m3 < p.density_kg_m3))
       in.fail_value("fluid", "density",
-                    "must be < particles.density = " + SceneReader::format_short(p.density_kg_m3) +
-                        " kg/m^3 (the particles must sink)");
+                    "must be in (0, particles.density = " + SceneReader::format_short(p.density_kg_m3) +
+                        ") kg/m^3 (fluid density; the particles must sink)");
     if (auto v = in.number("fluid", "viscosity")) f.viscosity_Pa_s = in.positive("fluid", "viscosity", *v);
     // AB2 with central advection (sim/fluid/solver.hpp, von Neumann): |G| <= 1 for Co <= 0.5 only
     if (auto v = in.number("fluid", "courant"))
@@ -691,13 +822,7 @@ Scene build_scene(const SceneReader& in) {
         "fluid", "coupling",
         {{"two-way", Coupling::TwoWay}, {"one-way", Coupling::OneWay}, {"quiescent", Coupling::Quiescent}},
         f.coupling);
-    f.drag = in.choice<DragLaw>("fluid", "drag",
-                                {{"beetstra", DragLaw::Beetstra},
-                                 {"wen-yu", DragLaw::WenYu},
-                                 {"stokes", DragLaw::Stokes},
-                                 {"radl2014", DragLaw::Radl2014},
-                                 {"model", DragLaw::Model}},
-                                f.drag);
+    f.drag = drag_law(in, accepts);
     if (auto v = in.boolean("fluid", "pressure_gradient_force")) f.pressure_gradient_force = *v;
     if (auto v = in.boolean("fluid", "parcel_correction")) f.parcel_correction = *v;
     if (auto v = in.string("fluid", "drag_model")) f.drag_model_path = *v;
@@ -721,9 +846,6 @@ Scene build_scene(const SceneReader& in) {
       f.drag_model_checksum = sum;
     }
     const bool has_cells = in.has("fluid", "cells"), has_dx = in.has("fluid", "dx_over_dp");
-    if (has_cells && has_dx)
-      in.fail_value("fluid", "dx_over_dp",
-                    "give either fluid.cells or fluid.dx_over_dp (cell size in primary diameters), not both");
     if (auto cells = in.ivec3("fluid", "cells")) {
       for (int i = 0; i < 3; ++i) {
         if ((*cells)[i] < 1 || (*cells)[i] > 1'000'000)
@@ -733,14 +855,18 @@ Scene build_scene(const SceneReader& in) {
       }
     }
     if (auto v = in.number("fluid", "dx_over_dp")) {
-      in.positive("fluid", "dx_over_dp", *v);
+      // one rule: a cell size that gives 1 to 1000000 cells along every box edge
+      const std::string rule = "must be > 0 and give between 1 and 1000000 cells along every box edge (" +
+                               std::string(key_spec("fluid", "dx_over_dp").meaning) + "; the box is " +
+                               SceneReader::format_short(s.domain.size_m[0] / d) + " x " +
+                               SceneReader::format_short(s.domain.size_m[1] / d) + " x " +
+                               SceneReader::format_short(s.domain.size_m[2] / d) + " d_p)";
+      if (!(*v > 0.0)) in.fail_value("fluid", "dx_over_dp", rule);
       for (int i = 0; i < 3; ++i) {
         const double n = std::round(s.domain.size_m[i] / (*v * d));
         if (!(n >= 1.0) || n > 1e6)
           in.fail_value("fluid", "dx_over_dp",
-                        std::string("gives ") + SceneReader::format_short(n) + " cells along " + "xyz"[i] +
-                            "; the cell must be no larger than the box edge and there can be at most 1000000 "
-                            "cells per edge");
+                        rule + "; it gives " + SceneReader::format_short(n) + " cells along " + "xyz"[i]);
         f.cells[i] = static_cast<int>(n);
       }
     }
@@ -787,7 +913,7 @@ Scene build_scene(const SceneReader& in) {
     nm.sort_interval_steps = *v;
   }
 
-  // ---- derived numbers (models.md) ----
+  // ---- derived numbers (docs/models.md) ----
   DerivedScales& x = s.derived;
   x.particle_volume_m3 = sphere_volume(d);
   x.particle_mass_kg = p.density_kg_m3 * x.particle_volume_m3;
@@ -818,32 +944,30 @@ Scene build_scene(const SceneReader& in) {
     }
   }
 
-  // run times, possibly in units of t_ref
-  const auto time_key = [&](const char* seconds_key, const char* tref_key, double fallback, bool required) {
-    const bool has_s = in.has("run", seconds_key), has_t = in.has("run", tref_key);
-    if (has_s && has_t)
-      in.fail_value("run", tref_key,
-                    std::string("give either run.") + seconds_key + " (s) or run." + tref_key + ", not both");
-    if (has_t) return in.non_negative("run", tref_key, *in.number("run", tref_key)) * x.t_ref_s;
-    if (has_s) return in.non_negative("run", seconds_key, *in.number("run", seconds_key));
-    if (required)
-      in.fail_missing("run", seconds_key, std::string(" (or run.") + tref_key + " with a [fluid] section)");
-    return fallback;
+  // run times, possibly in units of t_ref; one rule per key: the end time > 0, the intervals and the
+  // start of the sampling window >= 0
+  const auto time_key = [&](const char* seconds_key, const char* tref_key,
+                            bool positive) -> std::optional<double> {
+    const bool has_t = in.has("run", tref_key);
+    const char* key = has_t ? tref_key : seconds_key;
+    const auto given = in.number("run", key);
+    if (!given) return std::nullopt;
+    const double value = positive ? in.positive("run", key, *given) : in.non_negative("run", key, *given);
+    return has_t ? value * x.t_ref_s : value;
   };
-  r.end_time_s = time_key("end_time", "end_time_tref", 0.0, true);
-  if (!(r.end_time_s > 0.0))
-    in.fail_value("run", in.has("run", "end_time") ? "end_time" : "end_time_tref",
-                  "must be > 0 (simulated time)");
-  r.dump_interval_s = time_key("dump_interval", "dump_interval_tref", 0.0, false);
-  r.series_interval_s = time_key("series_interval", "series_interval_tref", 0.0, false);
+  const auto end_time = time_key("end_time", "end_time_tref", true);
+  if (!end_time) in.fail_missing("run", "end_time", " (or run.end_time_tref with a [fluid] section)");
+  r.end_time_s = *end_time;
+  r.dump_interval_s = time_key("dump_interval", "dump_interval_tref", false).value_or(0.0);
+  r.series_interval_s = time_key("series_interval", "series_interval_tref", false).value_or(0.0);
   // the window of time averages (cgd-coarse's slip): by default the first 15 t_ref are transient
-  r.sampling_start_s = time_key("sampling_start", "sampling_start_tref", 15.0 * x.t_ref_s, false);
+  r.sampling_start_s = time_key("sampling_start", "sampling_start_tref", false).value_or(15.0 * x.t_ref_s);
 
   if (s.has_contacts()) {
     const double k_n_primary =
         c.stiffness_n_N_m ? *c.stiffness_n_N_m
                           : stiffness_from_gamma_star(*c.gamma_star, p.density_kg_m3, d, g, x.u_t_m_s);
-    // models.md "Parcels": k_n,parcel = alpha k_n keeps restitution, relative overlap and t_c/(d/v).
+    // docs/models.md "Parcels": k_n,parcel = alpha k_n keeps restitution, relative overlap and t_c/(d/v).
     const SpringDashpot sd = spring_dashpot(p.parcel_size * k_n_primary, c.restitution,
                                             x.parcel_mass_kg / 2.0, c.kn_over_kt, c.gamman_over_gammat);
     x.k_n_N_m = sd.k_n;
@@ -935,7 +1059,7 @@ std::string read_file(const std::string& path) {
 }  // namespace
 
 Scene load_scene_from_string(const std::string& toml_text, const std::string& origin,
-                             const std::vector<std::string>& overrides) {
+                             const std::vector<std::string>& overrides, const ToolAccepts& accepts) {
   toml::table root;
   try {
     root = toml::parse(toml_text, std::string_view(origin));
@@ -949,7 +1073,7 @@ Scene load_scene_from_string(const std::string& toml_text, const std::string& or
 
   const SceneReader reader(origin, root, overridden);
   reader.check_structure();
-  Scene scene = build_scene(reader);
+  Scene scene = build_scene(reader, accepts);
   scene.name = std::filesystem::path(origin).stem().string();
   scene.source_path = origin;
   if (scene.fluid && !scene.fluid->drag_model_checksum.empty())  // record the model file's checksum
@@ -958,8 +1082,9 @@ Scene load_scene_from_string(const std::string& toml_text, const std::string& or
   return scene;
 }
 
-Scene load_scene(const std::string& path, const std::vector<std::string>& overrides) {
-  return load_scene_from_string(read_file(path), path, overrides);
+Scene load_scene(const std::string& path, const std::vector<std::string>& overrides,
+                 const ToolAccepts& accepts) {
+  return load_scene_from_string(read_file(path), path, overrides, accepts);
 }
 
 // ---- describe_scene ------------------------------------------------------------------------------

@@ -1,5 +1,5 @@
 #pragma once
-// Scene: what to simulate, as plain validated config structs (design.md, "Scenes").
+// Scene: what to simulate, as plain validated config structs (every key: docs/scene-keys.md).
 // core/scene.cpp is the only place that sees the TOML parser; physics code receives these structs.
 // SI units everywhere; the unit is in the name or the comment of every field.
 #include <array>
@@ -30,7 +30,7 @@ enum class ContactModel { None, SpringDashpot };
 
 struct ContactConfig {
   ContactModel model = ContactModel::SpringDashpot;
-  std::optional<double> gamma_star;  // dimensionless stiffness (models.md); or stiffness_n
+  std::optional<double> gamma_star;  // dimensionless stiffness (docs/models.md "Contact law"); or stiffness_n
   std::optional<double> stiffness_n_N_m;
   double t_star = 0.02;              // dt_DEM / t_c
   double restitution = 0.9;
@@ -83,7 +83,7 @@ struct DerivedScales {
   double parcel_diameter_m = 0;       // alpha * d_p (collision diameter)
   double parcel_mass_kg = 0;          // alpha^3 * primary mass
   // fluid-related; 0 when the scene has no fluid
-  double u_t_m_s = 0;                 // Schiller-Naumann terminal velocity (models.md convention)
+  double u_t_m_s = 0;                 // Schiller-Naumann terminal velocity (docs/models.md convention)
   double re_p = 0;                    // rho_f d u_t / mu_f
   double fr_p = 0;                    // u_t^2 / (g d_p)
   double l_ref_m = 0;                 // u_t^2 / g
@@ -119,13 +119,26 @@ struct Scene {
   bool solves_fluid() const { return fluid && fluid->coupling != Coupling::Quiescent; }
 };
 
+/// What the tool loading a scene accepts beyond the schema: a scene means the same to every tool, but
+/// not every tool runs every scene, and a refusal is made (and the allowed values are offered) while
+/// the scene is read.
+struct ToolAccepts {
+  bool filtered_drag = true;  // fluid.drag = "radl2014" / "model": coarse-grid runs (cgd-coarse)
+};
+/// A resolved run (cgd-generate) uses a microscopic drag law.
+inline constexpr ToolAccepts kResolvedRunAccepts{.filtered_drag = false};
+
 /// Load, apply overrides ("section.key=value"), validate and derive. Throws InputError whose
-/// message names the file, the key, the value given and what is allowed. Writes nothing.
-Scene load_scene(const std::string& path, const std::vector<std::string>& overrides = {});
+/// message names the file, the key, the value given and what is allowed; a scene's structural
+/// problems (unknown, misplaced and mistyped keys, both keys of an alternative) are listed all at once.
+/// An override of a key that has an alternative (run.end_time / run.end_time_tref, fluid.cells /
+/// fluid.dx_over_dp, ...) replaces the alternative the file gives. Writes nothing.
+Scene load_scene(const std::string& path, const std::vector<std::string>& overrides = {},
+                 const ToolAccepts& accepts = {});
 
 /// Same, from TOML text (tests); `origin` stands in for the file name in messages.
 Scene load_scene_from_string(const std::string& toml_text, const std::string& origin,
-                             const std::vector<std::string>& overrides = {});
+                             const std::vector<std::string>& overrides = {}, const ToolAccepts& accepts = {});
 
 /// The keys a restart may change (the run's end, its snapshot, series and checkpoint intervals): every
 /// other key is physics, and a restart that changes it would continue a different simulation.

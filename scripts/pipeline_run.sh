@@ -4,7 +4,7 @@
 #   PARAMS: the text that defines the run (scene, --set overrides); kept in RUN_DIR.params.
 # If RUN_DIR holds an unfinished run of the same PARAMS with a checkpoint (a killed or failed make), it is
 # continued with --restart: nothing already computed is lost. Otherwise (new parameters, or no checkpoint)
-# RUN_DIR is removed and the run starts afresh. One progress line at the start, one a minute with the
+# RUN_DIR is removed, saying so and why, and the run starts afresh. One progress line at the start, one a minute with the
 # simulated time reached and an ETA (from the run's series.h5), and one at the end.
 set -uo pipefail
 label=$1 dir=$2 params=$3
@@ -18,6 +18,15 @@ if [ -d "$dir" ] && [ -f "$dir.params" ] && [ "$(cat "$dir.params")" = "$params"
   restart=(--restart)
   say "continuing the unfinished run in $dir from its checkpoint"
 else
+  if [ -e "$dir" ]; then  # say what is lost, and why
+    same=no
+    [ -f "$dir.params" ] && [ "$(cat "$dir.params")" = "$params" ] && same=yes
+    if [ -f "$dir/DONE" ] && [ $same = yes ]; then why="a complete run that make found out of date"
+    elif [ -f "$dir/DONE" ]; then why="a complete run with other parameters"
+    elif [ $same = yes ]; then why="an unfinished run without a checkpoint to continue from"
+    else why="an unfinished run with other parameters"; fi
+    say "removing the previous run in $dir ($why)"
+  fi
   rm -rf "$dir" "$dir.params"
   say "running -> $dir"
 fi

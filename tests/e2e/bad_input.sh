@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# e2e: cgd-generate refuses bad input the way design.md "Command lines" says: exit status 2,
+# e2e: cgd-generate refuses bad input the way the README's "Exit statuses" says: exit status 2,
 # a message on stderr that names the file and the key, and nothing written (the run directory
 # given with -o does not exist afterwards). --help and --version exit 0 and write nothing either.
 #
@@ -49,8 +49,11 @@ sed 's/^solids_fraction = 0.05 /solids_fraction = 0.7 /' "$base" >"$tmp/packed.t
 sed 's/^density = 1500.0 /density = "heavy" /' "$base" >"$tmp/type.toml"
 sed 's/^drag = "stokes" /drag = "ergun" /' "$base" >"$tmp/enum.toml"
 sed 's/^end_time = 0.1 /end_time = = 0.1 /' "$base" >"$tmp/syntax.toml"
+sed -e 's/^diameter = 75e-6 /diamter = 75e-6 /' -e 's/^viscosity = 1.8e-5 /viscosity = 1.8e-5\nseed = 2 /' "$base" >"$tmp/typos.toml"
+sed 's/^end_time = 0.1 /end_time = 0.1\nend_time_tref = 2 /' "$base" >"$tmp/twice.toml"
 grep -q '^diamter' "$tmp/typo.toml" && grep -q '0.7' "$tmp/packed.toml" && grep -q '"heavy"' "$tmp/type.toml" &&
-  grep -q 'ergun' "$tmp/enum.toml" && grep -q '= = 0.1' "$tmp/syntax.toml" ||
+  grep -q 'ergun' "$tmp/enum.toml" && grep -q '= = 0.1' "$tmp/syntax.toml" && grep -q '^seed = 2' "$tmp/typos.toml" &&
+  grep -q '^end_time_tref' "$tmp/twice.toml" ||
   { echo "FAIL: could not derive the bad scenes from $base (its lines changed?)"; exit 1; }
 
 expect_bad missing-file          "error:" "$tmp/nope.toml" "no such file"                   -- "$tmp/nope.toml"
@@ -63,6 +66,12 @@ expect_bad set-without-equals    "--set particles.solids_fraction" "SECTION.KEY=
 expect_bad set-unknown-key       "fluid.drg" "fluid.drag"                                   -- "$base" --set fluid.drg=stokes
 expect_bad set-out-of-range      "particles.diameter = -1e-05 (from --set)" "must be > 0"   -- "$base" --set particles.diameter=-1e-5
 expect_bad unknown-option        "--bogus"                                                  -- "$base" --bogus
+# issue 11, item 4: every unknown or misplaced key at once; one rule per key; alternatives given twice
+expect_bad every-unknown-key     "typos.toml: 2 problems" "particles.diamter" "did you mean particles.diameter?" \
+                                 "fluid.seed; did you mean particles.seed?"                 -- "$tmp/typos.toml"
+expect_bad negative-end-time     "run.end_time = -1.0 (from --set): must be > 0"            -- "$base" --set run.end_time=-1.0
+expect_bad alternatives-in-file  "run.end_time = 0.1 and run.end_time_tref = 2" "not both" \
+                                 "--set run.end_time=VALUE replaces run.end_time_tref"      -- "$tmp/twice.toml"
 # nonsense that passes key-by-key validation but cannot be run (issue 10, item 5); before, each ran:
 # a diameter in the wrong unit did "0 steps" with exit 0 and a DONE, an end time below one step completed
 # 0 steps, a DEM step above the fluid's Courant step failed after the run started (or ran away)

@@ -1,4 +1,4 @@
-// Scene loading: validation messages (table-driven), derived numbers against models.md and the
+// Scene loading: validation messages (table-driven), derived numbers against docs/models.md and the
 // peer benchmark's params.inc, --set overrides, the shipped scenes, and the command-line front.
 #include <gtest/gtest.h>
 
@@ -78,6 +78,7 @@ struct BadInput {
   std::string toml;  // scene text
   std::vector<std::string> overrides;
   std::vector<std::string> expected;  // substrings of the message: key, value, what is allowed
+  cgd::ToolAccepts accepts{};         // what the tool loading the scene accepts (default: every law)
 };
 
 std::vector<BadInput> bad_inputs() {
@@ -273,7 +274,7 @@ std::vector<BadInput> bad_inputs() {
       {"RejectsFluidDenserThanParticles",
        replaced(wet, "density = 1.3", "density = 2000.0"),
        {},
-       {"fluid.density = 2000.0", "must be < particles.density = 1500"}},
+       {"fluid.density = 2000.0", "must be in (0, particles.density = 1500) kg/m^3"}},
       {"RejectsZeroCells",
        replaced(two_way, "cells = [8, 32, 8]", "cells = [0, 32, 8]"),
        {},
@@ -281,11 +282,29 @@ std::vector<BadInput> bad_inputs() {
       {"RejectsCellLargerThanBox",
        replaced(two_way, "cells = [8, 32, 8]", "dx_over_dp = 100.0"),
        {},
-       {"fluid.dx_over_dp = 100.0", "gives 0 cells along x"}},
+       {"fluid.dx_over_dp = 100.0", "must be > 0 and give between 1 and 1000000 cells along every box edge",
+        "it gives 0 cells along x"}},
       {"RejectsZeroEndTime",
        replaced(wet, "end_time = 0.05", "end_time = 0"),
        {},
        {"run.end_time = 0", "must be > 0"}},
+      {"RejectsNegativeEndTimeWithTheRuleOfZero",
+       replaced(wet, "end_time = 0.05", "end_time = -1.0"),
+       {},
+       {"run.end_time = -1.0", "must be > 0 (s, simulated time)"}},
+      {"RejectsNegativeEndTimeInTref",
+       replaced(wet, "end_time = 0.05", "end_time_tref = -2.0"),
+       {},
+       {"run.end_time_tref = -2.0", "must be > 0 (simulated time in units of t_ref"}},
+      {"RejectsNegativeFluidDensityWithTheRuleOfADenseFluid",
+       replaced(wet, "density = 1.3", "density = -1.3"),
+       {},
+       {"fluid.density = -1.3", "must be in (0, particles.density = 1500) kg/m^3"}},
+      {"RejectsNegativeCellSizeWithTheRuleOfALargeOne",
+       replaced(two_way, "cells = [8, 32, 8]", "dx_over_dp = -3.0"),
+       {},
+       {"fluid.dx_over_dp = -3.0", "must be > 0 and give between 1 and 1000000 cells along every box edge",
+        "24 x 96 x 24 d_p"}},
       {"RejectsNegativeDumpInterval",
        replaced(wet, "dump_interval = 0.005", "dump_interval = -1.0"),
        {},
@@ -308,13 +327,15 @@ std::vector<BadInput> bad_inputs() {
       {"RejectsUnknownDragLaw",
        replaced(wet, "drag = \"stokes\"", "drag = \"ergun\""),
        {},
-       {"fluid.drag = \"ergun\"", "\"beetstra\", \"wen-yu\", \"stokes\", \"radl2014\", \"model\""}},
+       {"fluid.drag = \"ergun\"", "\"beetstra\", \"wen-yu\", \"stokes\", \"radl2014\", \"model\"",
+        "filtered laws of coarse-grid runs"}},
 
       // --- alternatives and keys that need something else
       {"RejectsGammaStarTogetherWithStiffness",
        replaced(wet, "gamma_star = 1e-3", "gamma_star = 1e-3\nstiffness = 1.27"),
        {},
-       {"contact.gamma_star or contact.stiffness", "not both"}},
+       {"contact.gamma_star = 0.001 and contact.stiffness = 1.27", "give either contact.gamma_star",
+        "not both", "delete one", "--set contact.gamma_star=VALUE replaces contact.stiffness"}},
       {"RejectsGammaStarWithoutFluid",
        replaced(dry, "stiffness = 1.27", "gamma_star = 1e-3"),
        {},
@@ -334,15 +355,41 @@ std::vector<BadInput> bad_inputs() {
       {"RejectsEndTimeGivenTwice",
        replaced(wet, "end_time = 0.05", "end_time = 0.05\nend_time_tref = 2.0"),
        {},
-       {"run.end_time_tref = 2.0", "run.end_time (s) or run.end_time_tref, not both"}},
+       {"run.end_time = 0.05 and run.end_time_tref = 2.0",
+        "run.end_time (s) or run.end_time_tref (units of t_ref", "not both",
+        "--set run.end_time=VALUE replaces run.end_time_tref"}},
       {"RejectsBoxSizeGivenTwice",
        replaced(wet, "size_dp = [24, 96, 24]", "size_dp = [24, 96, 24]\nsize = [1e-3, 1e-3, 1e-3]"),
        {},
-       {"domain.size", "domain.size (m) or domain.size_dp", "not both"}},
+       {"domain.size_dp = [24, 96, 24] and domain.size = [0.001, 0.001, 0.001]",
+        "domain.size_dp (primary diameters) or domain.size (m)", "not both"}},
       {"RejectsCellsTogetherWithCellSize",
        replaced(two_way, "cells = [8, 32, 8]", "cells = [8, 32, 8]\ndx_over_dp = 3.0"),
        {},
-       {"fluid.cells or fluid.dx_over_dp", "not both"}},
+       {"fluid.cells = [8, 32, 8] and fluid.dx_over_dp = 3.0", "give either fluid.cells", "not both"}},
+      {"RejectsDumpIntervalGivenTwice",
+       replaced(wet, "dump_interval = 0.005", "dump_interval = 0.005\ndump_interval_tref = 1.0"),
+       {},
+       {"run.dump_interval = 0.005 and run.dump_interval_tref = 1.0", "not both"}},
+      {"RejectsSeriesIntervalGivenTwice",
+       wet + "series_interval = 0.001\nseries_interval_tref = 0.1\n",
+       {},
+       {"run.series_interval = 0.001 and run.series_interval_tref = 0.1", "not both"}},
+      {"RejectsSamplingStartGivenTwice",
+       wet + "sampling_start = 0.01\nsampling_start_tref = 1.0\n",
+       {},
+       {"run.sampling_start = 0.01 and run.sampling_start_tref = 1.0", "not both"}},
+      {"ResolvedRunsRefuseAFilteredLawNamingTheToolThatTakesIt",
+       replaced(wet, "drag = \"stokes\"", "drag = \"radl2014\""),
+       {},
+       {"fluid.drag = \"radl2014\"", "coarse-grid runs (cgd-coarse)", "\"beetstra\", \"wen-yu\", \"stokes\""},
+       cgd::kResolvedRunAccepts},
+      {"ResolvedRunsOfferOnlyMicroscopicLaws",
+       replaced(wet, "drag = \"stokes\"", "drag = \"wenyu\""),
+       {},
+       {"must be one of \"beetstra\", \"wen-yu\", \"stokes\" (microscopic drag law;",
+        "did you mean \"wen-yu\"?"},
+       cgd::kResolvedRunAccepts},
       {"RejectsExplicitTimeStepWithContacts",
        replaced(wet, "end_time = 0.05", "end_time = 0.05\ndt = 1e-6"),
        {},
@@ -391,7 +438,7 @@ class SceneValidation : public ::testing::TestWithParam<BadInput> {};
 TEST_P(SceneValidation, MessageNamesKeyValueAndAllowedRange) {
   const BadInput& c = GetParam();
   try {
-    load_scene_from_string(c.toml, "scene.toml", c.overrides);
+    load_scene_from_string(c.toml, "scene.toml", c.overrides, c.accepts);
     FAIL() << "accepted a bad scene (" << c.name << ")";
   } catch (const InputError& e) {
     const std::string message = e.what();
@@ -436,15 +483,15 @@ TEST(SceneDerived, PaperParametersGiveTheReferenceScalesOfModelsMd) {
   const auto s = load_scene_from_string(kWetScene, "paper.toml");
   const auto& x = s.derived;
   const double d = 75e-6;
-  // models.md quotes these to the digits below; tolerances are half a unit of the last digit quoted.
+  // docs/models.md quotes these to the digits below; tolerances are half a unit of the last digit quoted.
   EXPECT_NEAR(x.u_t_m_s, 0.2185, 0.00005);
   EXPECT_NEAR(x.re_p, 1.18, 0.005);
   EXPECT_NEAR(x.fr_p, 65.0, 0.5);
   EXPECT_NEAR(x.l_ref_m, 4.86e-3, 0.005e-3);
   EXPECT_NEAR(x.l_char_m / d, 4.02,
-              0.005);  // (models.md's "3.02e-4 m" is 4.02 d_p rounded up; 4.018 d_p = 3.013e-4 m)
+              0.005);  // (docs/models.md's "3.02e-4 m" is 4.02 d_p rounded up; 4.018 d_p = 3.013e-4 m)
   EXPECT_NEAR(x.t_ref_s, 0.0223, 0.00005);
-  // Contact numbers of models.md (1.27 N/m, 3.59e-5 s, 7.18e-7 s) are rounded from u_t ~= 0.219 m/s
+  // Contact numbers of docs/models.md (1.27 N/m, 3.59e-5 s, 7.18e-7 s) are rounded from u_t ~= 0.219 m/s
   // (the peer benchmark's value); with u_t = 0.21851 m/s the same gamma* gives k_n = 1.2760 N/m.
   // So: within 0.5 % of the quoted values, and exact against the formulas below.
   EXPECT_LT(relative(x.k_n_N_m, 1.27), 0.005);
@@ -501,7 +548,7 @@ TEST(SceneDerived, PeerBenchmarkStiffnessReproducesParamsInc) {
 }
 
 TEST(SceneDerived, ParcelsScaleStiffnessAndContactTimeWithParcelSize) {
-  // models.md "Parcels": mass alpha^3 m, k_n,parcel = alpha k_n, so t_c,parcel = alpha t_c.
+  // docs/models.md "Parcels": mass alpha^3 m, k_n,parcel = alpha k_n, so t_c,parcel = alpha t_c.
   const std::string base = replaced(kDryScene, "size_dp = [32, 32, 32]", "size_dp = [64, 64, 64]");
   const auto one = load_scene_from_string(base, "a.toml");
   const auto two = load_scene_from_string(base, "b.toml", {"particles.parcel_size=2"});
@@ -620,6 +667,115 @@ TEST(SceneOverrides, EffectiveTomlHoldsTheOverridesAndReloadsToTheSameScene) {
   EXPECT_EQ(again.derived.u_t_m_s, s.derived.u_t_m_s);
 }
 
+// Issue 11, item 3: each pair of keys that gives one quantity two ways can be switched from the command
+// line: a --set of one key replaces the other in the file, and the effective scene holds only the new one.
+TEST(SceneOverrides, SetSwitchesEveryAlternative) {
+  const std::string two_way =
+      replaced(kWetScene, "coupling = \"quiescent\"", "coupling = \"two-way\"\ncells = [8, 32, 8]");
+  struct Switch {
+    std::string scene, set, replaced_line;
+  };
+  const std::vector<Switch> switches = {
+      {two_way, "run.end_time_tref=2", "end_time = "},
+      {replaced(two_way, "end_time = 0.05", "end_time_tref = 2.0"), "run.end_time=0.01", "end_time_tref = "},
+      {two_way, "run.dump_interval_tref=0.5", "dump_interval = "},
+      {two_way + "series_interval = 0.001\n", "run.series_interval_tref=0.1", "series_interval = "},
+      {two_way + "sampling_start_tref = 1.0\n", "run.sampling_start=0.002", "sampling_start_tref = "},
+      {two_way, "fluid.dx_over_dp=4", "cells = "},
+      {replaced(two_way, "cells = [8, 32, 8]", "dx_over_dp = 3.0"), "fluid.cells=[6, 24, 6]",
+       "dx_over_dp = "},
+      {two_way, "domain.size=[2e-3, 8e-3, 2e-3]", "size_dp = "},
+      {two_way, "contact.stiffness=1.27", "gamma_star = "},
+      {replaced(two_way, "gamma_star = 1e-3", "stiffness = 1.27"), "contact.gamma_star=1e-3", "stiffness = "},
+  };
+  for (const Switch& sw : switches) {
+    SCOPED_TRACE("--set " + sw.set);
+    ASSERT_NE(sw.scene.find(sw.replaced_line), std::string::npos) << "stale case: the scene lacks the key";
+    cgd::Scene s;
+    ASSERT_NO_THROW(s = load_scene_from_string(sw.scene, "scene.toml", {sw.set}));
+    EXPECT_EQ(s.effective_toml.find("\n" + sw.replaced_line), std::string::npos) << s.effective_toml;
+    const std::string set_key = sw.set.substr(sw.set.find('.') + 1, sw.set.find('=') - sw.set.find('.') - 1);
+    EXPECT_NE(s.effective_toml.find("\n" + set_key + " = "), std::string::npos) << s.effective_toml;
+  }
+  // the values are the new ones
+  const auto end_in_s = load_scene_from_string(replaced(two_way, "end_time = 0.05", "end_time_tref = 2.0"),
+                                               "scene.toml", {"run.end_time=0.01"});
+  EXPECT_DOUBLE_EQ(end_in_s.run.end_time_s, 0.01);
+  const auto end_in_tref = load_scene_from_string(two_way, "scene.toml", {"run.end_time_tref=2"});
+  EXPECT_DOUBLE_EQ(end_in_tref.run.end_time_s, 2.0 * end_in_tref.derived.t_ref_s);
+  const auto cells = load_scene_from_string(two_way, "scene.toml", {"fluid.dx_over_dp=4"});
+  EXPECT_EQ(cells.fluid->cells, (std::array<int, 3>{6, 24, 6}));
+  // two --set of one pair: the later wins, as for one key given twice
+  const auto later =
+      load_scene_from_string(two_way, "scene.toml", {"run.end_time_tref=2", "run.end_time=0.02"});
+  EXPECT_DOUBLE_EQ(later.run.end_time_s, 0.02);
+}
+
+// Issue 11, item 4: a scene with several unknown or misplaced keys is refused with all of them listed, so
+// the user fixes the file in one go; each section's key list is given once.
+TEST(SceneValidation, ListsEveryUnknownAndMisplacedKeyAtOnce) {
+  std::string text = replaced(kWetScene, "diameter = 75e-6", "diamter = 75e-6\nend_time_tref = 2");
+  text = replaced(text, "viscosity = 1.8e-5", "viscosity = 1.8e-5\nseed = 3");
+  text = replaced(text, "friction = 0.1", "friction = \"high\"");
+  try {
+    load_scene_from_string(text, "scene.toml");
+    FAIL() << "accepted a scene with four bad keys";
+  } catch (const InputError& e) {
+    const std::string message = e.what();
+    for (const char* expected :
+         {"scene.toml: 4 problems:", "unknown key particles.diamter; did you mean particles.diameter?",
+          "unknown key particles.end_time_tref; did you mean run.end_time_tref?",
+          "unknown key fluid.seed; did you mean particles.seed?",
+          "contact.friction = \"high\": must be a number", "(keys of [particles]: diameter,",
+          "(keys of [fluid]: density,"})
+      EXPECT_NE(message.find(expected), std::string::npos)
+          << "expected \"" << expected << "\" in: " << message;
+    const auto first = message.find("keys of [particles]");
+    EXPECT_EQ(message.find("keys of [particles]", first + 1), std::string::npos)
+        << "each key list once: " << message;
+  }
+}
+
+// Issue 11, item 4: one rule per key. A value on either side of the allowed range gets the same rule.
+TEST(SceneValidation, BothSidesOfARangeStateTheSameRule) {
+  const std::string two_way =
+      replaced(kWetScene, "coupling = \"quiescent\"", "coupling = \"two-way\"\ncells = [8, 32, 8]");
+  struct Sides {
+    std::string key;
+    std::string low, high;  // overrides below and above the allowed range
+    std::string scene;
+  };
+  const std::vector<Sides> cases = {
+      {"run.end_time", "run.end_time=-1", "run.end_time=0", kWetScene},
+      {"fluid.density", "fluid.density=-1", "fluid.density=2000", kWetScene},
+      {"fluid.dx_over_dp", "fluid.dx_over_dp=-1", "fluid.dx_over_dp=1000", two_way},
+  };
+  const auto rule = [](const std::string& scene, const std::string& set) {
+    try {
+      load_scene_from_string(scene, "scene.toml", {set});
+    } catch (const InputError& e) {
+      const std::string message = e.what();
+      const auto start = message.find(": ", message.find(" = ")) + 2;
+      return message.substr(start, message.find(';', start) - start);  // up to what the value gives
+    }
+    return std::string("(accepted)");
+  };
+  for (const Sides& c : cases) {
+    SCOPED_TRACE(c.key);
+    const std::string low = rule(c.scene, c.low), high = rule(c.scene, c.high);
+    EXPECT_NE(low, "(accepted)");
+    EXPECT_EQ(low, high);
+  }
+}
+
+TEST(SceneFiles, FilteredLawsLoadForCoarseRunsOnly) {
+  const std::string radl = replaced(kWetScene, "drag = \"stokes\"", "drag = \"radl2014\"");
+  EXPECT_EQ(load_scene_from_string(radl, "scene.toml").fluid->drag, cgd::DragLaw::Radl2014);
+  EXPECT_THROW(load_scene_from_string(radl, "scene.toml", {}, cgd::kResolvedRunAccepts), InputError);
+  EXPECT_EQ(load_scene_from_string(kWetScene, "scene.toml", {}, cgd::kResolvedRunAccepts).fluid->drag,
+            cgd::DragLaw::Stokes);
+}
+
 // ---- names and description --------------------------------------------------------------------
 
 TEST(SceneNames, EnumNamesAreTheSceneNames) {
@@ -693,7 +849,7 @@ TEST(SceneFiles, EveryShippedSceneLoads) {
 
 TEST(SceneFiles, PeerBenchmarkScenesMatchThePeerCounts) {
   const std::filesystem::path dir = scene_dir();
-  // shared/peers/README.md: N per case (gen_init rounds phi V / V_p the same way)
+  // bench/README.md: N per case (gen_init rounds phi V / V_p the same way)
   const std::vector<std::pair<const char*, std::int64_t>> cases = {
       {"bench_s10", 25033}, {"bench_s30", 75099}, {"bench_l10", 200263}, {"bench_l30", 600790}};
   for (const auto& [name, count] : cases) {
