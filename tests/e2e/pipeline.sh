@@ -13,7 +13,7 @@ trap 'rm -rf "$tmp"' EXIT
 failures=0
 fail() { echo "FAIL $*"; failures=$((failures + 1)); }
 vars=(OUT="$tmp/out" BUILD="$binary_dir" PHIS=0.05 BOX_DP=20 FROM_TREF=0.5 BINS=0.005
-      "GENERATE_SET=domain.size_dp=[20,80,20] run.end_time_tref=2 run.dump_interval_tref=0.1"
+      "GENERATE_SET=domain.size_dp=[20,80,20] run.end_time_tref=2 run.dump_interval_tref=0.1 run.sampling_start_tref=0.5"
       "COARSE_SET=domain.size_dp=[20,80,20] run.end_time_tref=2 run.sampling_start_tref=0.5"
       "FIT_ARGS=--min-width-over-cell 1.4 --min-count 20 --bootstrap 50 --no-cross-validation"
       COARSE_CELLS=4 ALPHAS=1,2)
