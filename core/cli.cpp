@@ -135,6 +135,8 @@ int run_tool(const std::function<int()>& body) {
     return e.status();
   } catch (const InputError& e) {
     return report(std::string("error: ") + e.what() + "\n", kExitBadInput);
+  } catch (const Interrupted& e) {
+    return report(std::string("run interrupted: ") + e.what() + "\n", e.exit_status());
   } catch (const RunError& e) {
     return report(std::string("run failed: ") + e.what() + "\n", kExitRunFailed);
   } catch (const std::exception& e) {

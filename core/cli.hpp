@@ -17,7 +17,8 @@
 //   }
 //
 // run_tool turns the error kinds into the exit statuses of design.md: InputError -> 2 ("error: ..."),
-// RunError -> 1 ("run failed: ..."), a bad option -> 2 (CLI11's message), --help/--version -> 0.
+// RunError -> 1 ("run failed: ..."), Interrupted -> 128 + signal ("run interrupted: ...": 130 for SIGINT,
+// 143 for SIGTERM), a bad option -> 2 (CLI11's message), --help/--version -> 0.
 // Under MPI only rank 0 prints.
 #include <functional>
 #include <stdexcept>

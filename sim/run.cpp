@@ -30,8 +30,10 @@ namespace cgd {
 
 namespace {
 
+/// The signal (SIGINT or SIGTERM) that asked the run to stop, 0 if none: the loop checkpoints at its next
+/// step boundary and ends with Interrupted (exit status 128 + signal).
 volatile std::sig_atomic_t g_interrupted = 0;
-extern "C" void on_signal(int) { g_interrupted = 1; }
+extern "C" void on_signal(int signal_number) { g_interrupted = signal_number; }
 
 std::string snapshot_name(std::int64_t step) {
   char buf[64];
@@ -614,15 +616,17 @@ class RunDriver {
   void checkpoint_if_due(std::int64_t step) {
     if (step == end_step_ && restarted_from_ != step) write_checkpoint();  // the final state can be extended
     if (step == end_step_) return;
-    int flags[2] = {g_interrupted ? 1 : 0, 0};
+    int flags[2] = {static_cast<int>(g_interrupted), 0};  // the signal (max over ranks), checkpoint due
     if (rank_ == 0 && wall_seconds() - last_checkpoint_wall_ >= scene_.run.checkpoint_wall_s) flags[1] = 1;
     MPI_Allreduce(MPI_IN_PLACE, flags, 2, MPI_INT, MPI_MAX, comm_);
     if (flags[0]) {
       write_checkpoint();
       progress(step, true);
-      throw RunError("interrupted at step " + std::to_string(step) + " (t = " +
-                     std::to_string(static_cast<double>(step) * dt_) + " s); checkpoint written, continue with " +
-                     "--restart");
+      throw Interrupted(std::string(flags[0] == SIGINT ? "SIGINT" : flags[0] == SIGTERM ? "SIGTERM" : "a signal") +
+                            " at step " + std::to_string(step) + " (t = " +
+                            std::to_string(static_cast<double>(step) * dt_) + " s); checkpoint written to " +
+                            (dir_ / "checkpoint.h5").string() + ", continue with --restart",
+                        flags[0]);
     }
     if ((flags[1] || checkpoint_requested_) && step != restarted_from_) write_checkpoint();
     checkpoint_requested_ = false;
@@ -805,6 +809,17 @@ Scene restart_scene(const Scene& scene, const std::string& output_dir, MPI_Comm 
 }
 
 void run_scene(const Scene& scene, const RunSettings& settings, MPI_Comm comm) {
+  // -o naming a file is bad input, refused before anything is written (rank 0's view, shared).
+  int rank = 0, not_a_directory = 0;
+  MPI_Comm_rank(comm, &rank);
+  if (rank == 0) {
+    std::error_code ec;
+    not_a_directory = fs::exists(settings.output_dir, ec) && !fs::is_directory(settings.output_dir, ec) ? 1 : 0;
+  }
+  MPI_Bcast(&not_a_directory, 1, MPI_INT, 0, comm);
+  if (not_a_directory)
+    throw InputError("-o " + settings.output_dir + ": exists and is not a directory; the run directory must be a " +
+                     "new or empty directory, or with --restart the directory of an earlier run");
   if (settings.restart) {
     const Scene restarted = restart_scene(scene, settings.output_dir, comm);
     RunDriver driver(restarted, settings, comm);

@@ -25,9 +25,10 @@ struct RunSettings {
 };
 
 /// Runs the scene to its end time; returns normally when done. Throws InputError before writing
-/// anything for bad input (an existing run directory without --restart, a missing checkpoint),
-/// and RunError for a failed run, after writing a diagnostic snapshot and keeping the last
-/// checkpoint. SIGINT/SIGTERM write a checkpoint and end the run with RunError ("interrupted").
+/// anything for bad input (an output path that is a file, an existing run directory without --restart,
+/// a missing checkpoint), and RunError for a failed run, after writing a diagnostic snapshot and keeping
+/// the last checkpoint. SIGINT/SIGTERM write a checkpoint at the next step boundary and end the run with
+/// Interrupted (exit status 130 / 143).
 /// With settings.restart: refuses (InputError, nothing written) a scene whose physics differs from the
 /// checkpoint's (restart_differences), an end time before the checkpoint, and does nothing for a run
 /// that is already complete (DONE written and the checkpoint at the end).
