@@ -57,7 +57,12 @@ RunOptions parse_run_command_line(int argc, char** argv, const std::string& tool
   app.add_option("-o,--output", options.output_dir, "Run directory (default: out/<stage>/<scene name>)")
       ->type_name("DIR");
   app.add_flag("--restart", options.restart, "Continue from the checkpoint in the run directory");
-  app.add_flag("--quiet", options.quiet, "No progress output");
+  app.add_flag("--quiet", options.quiet, "Errors, warnings and the final summary only: no banner, no progress");
+  app.add_option("--progress-interval", options.progress_interval_s,
+                 "Wall seconds between progress lines when stderr is not a terminal (a batch log; default 60); "
+                 "on a terminal one line is updated about once a second")
+      ->type_name("SECONDS")
+      ->check(CLI::PositiveNumber);
   if (add_options) add_options(app);
   parse_command_line(app, argc, argv, tool_name);
   if (options.scene_path.empty()) {

@@ -1,7 +1,5 @@
 #include "sim/run.hpp"
 
-#include <unistd.h>
-
 #include <algorithm>
 #include <cmath>
 #include <csignal>
@@ -22,6 +20,7 @@
 #include "core/timers.hpp"
 #include "sim/coupled_step.hpp"
 #include "sim/dem/placement.hpp"
+#include "sim/progress.hpp"
 #include "sim/fluid/grid.hpp"
 
 namespace fs = std::filesystem;
@@ -38,15 +37,6 @@ extern "C" void on_signal(int signal_number) { g_interrupted = signal_number; }
 std::string snapshot_name(std::int64_t step) {
   char buf[64];
   std::snprintf(buf, sizeof buf, "snap_%09lld.h5", static_cast<long long>(step));
-  return buf;
-}
-
-std::string format_duration(double s) {
-  if (!std::isfinite(s) || s < 0) return "--:--";
-  const long t = std::lround(s);
-  char buf[32];
-  if (t >= 3600) std::snprintf(buf, sizeof buf, "%ld:%02ld:%02ld", t / 3600, (t / 60) % 60, t % 60);
-  else std::snprintf(buf, sizeof buf, "%02ld:%02ld", t / 60, t % 60);
   return buf;
 }
 
@@ -158,7 +148,8 @@ class RunDriver {
         settings_(settings),
         comm_(comm),
         grid_(make_grid(scene, comm)),
-        dem_(make_dem_settings(scene, grid_.get(), comm), comm) {
+        dem_(make_dem_settings(scene, grid_.get(), comm), comm),
+        progress_(Progress::Settings{}) {
     MPI_Comm_rank(comm_, &rank_);
     MPI_Comm_size(comm_, &ranks_);
     dir_ = settings_.output_dir;
@@ -177,6 +168,16 @@ class RunDriver {
       coupled_ = std::make_unique<CoupledStep>(scene_, *grid_, dt_, run_timers_);
       end_step_ = coupled_end_step(end_step_, dump_every_, scene_.run.end_time_s, scene_.run.dump_interval_s);
     }
+    Progress::Settings ps;
+    ps.tool = settings_.tool;
+    ps.mode = Progress::mode_for(settings_.quiet);
+    ps.interval_s = settings_.progress_interval_s;
+    ps.end_step = end_step_;
+    ps.dt_s = dt_;
+    ps.t_ref_s = scene_.derived.t_ref_s;
+    ps.fluid_scene = scene_.fluid.has_value();
+    ps.solves_fluid = coupled_ != nullptr;
+    progress_ = Progress(ps);
   }
 
   /// Coupled runs whose end time is a whole number k of snapshot intervals end on the k-th snapshot step.
@@ -328,6 +329,9 @@ class RunDriver {
     r.phase_seconds = phase_seconds();
     MPI_Bcast(r.phase_seconds.data(), static_cast<int>(r.phase_seconds.size()), MPI_DOUBLE, 0, comm_);
     schema::append_run_row(series_, series_layout(), r);
+    const double u_t = scene_.derived.u_t_m_s;
+    progress_physics_ = {u_t > 0 ? r.slip_velocity_m_s[1] / u_t : 0.0, r.kinetic_energy_J, r.max_overlap_rel,
+                         r.max_solids_fraction, r.dt_fluid_s};
   }
 
   /// Snapshot of step n, between advance() and commit(): x_n and the synchronous velocities.
@@ -537,7 +541,7 @@ class RunDriver {
 
   // ---- loop ---------------------------------------------------------------------------------------
   void print_banner() {
-    if (rank_ != 0) return;
+    if (rank_ != 0 || settings_.quiet) return;
     std::ostringstream o;
     o << settings_.tool << " " << CGD_VERSION << ": scene " << scene_.name << " (" << scene_.source_path << ")\n";
     o << describe_scene(scene_);
@@ -552,19 +556,9 @@ class RunDriver {
     std::cout << o.str() << std::flush;
   }
 
+  /// A progress line when due (rank 0; sim/progress.hpp), with the physics of the latest series row.
   void progress(std::int64_t step, bool force) {
-    if (rank_ != 0 || settings_.quiet || !isatty(STDERR_FILENO)) return;
-    const double now = wall_seconds();
-    if (!force && now - last_progress_ < 1.0) return;
-    last_progress_ = now;
-    const double done = static_cast<double>(step - loop_start_step_);
-    const double rate = done / std::max(1e-9, now - loop_start_wall_);
-    const double eta = static_cast<double>(end_step_ - step) / std::max(rate, 1e-30);
-    std::fprintf(stderr, "\r%s: step %lld/%lld (%.1f %%)  t = %.4g s  %.3g steps/s  ETA %s   ",
-                 settings_.tool.c_str(), static_cast<long long>(step), static_cast<long long>(end_step_),
-                 100.0 * static_cast<double>(step) / std::max<double>(1, static_cast<double>(end_step_)),
-                 static_cast<double>(step) * dt_, rate, format_duration(eta).c_str());
-    if (force) std::fprintf(stderr, "\n");
+    if (rank_ == 0) progress_.update(step, progress_physics_, force);
   }
 
   void time_loop() {
@@ -591,6 +585,7 @@ class RunDriver {
     loop_start_wall_ = wall_seconds();
     last_checkpoint_wall_ = loop_start_wall_;
     loop_start_step_ = dem_.step_index();
+    if (rank_ == 0) progress_.begin(loop_start_step_);
   }
 
   /// A snapshot at step 0, every dump interval and the end, with the series rewritten beside it.
@@ -768,12 +763,14 @@ class RunDriver {
   std::vector<checkpoint::Frame> frames_;
   PhaseTimers run_timers_;
   std::size_t t_output_ = 0, t_checkpoint_ = 0, t_diag_ = 0;
-  double wall_start_ = wall_seconds(), wall_offset_ = 0, last_checkpoint_wall_ = 0, last_progress_ = 0;
+  double wall_start_ = wall_seconds(), wall_offset_ = 0, last_checkpoint_wall_ = 0;
   double loop_start_wall_ = 0;
   std::int64_t loop_start_step_ = 0, restarted_from_ = -1;
   std::string placement_method_;
   double placement_gap_ = 0, placement_seconds_ = 0;
   bool overlap_warned_ = false, checkpoint_requested_ = false;
+  Progress progress_;
+  ProgressPhysics progress_physics_;  // of the latest series row
 };
 
 }  // namespace

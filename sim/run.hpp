@@ -20,7 +20,8 @@ dem::DemSettings dem_settings_from_scene(const Scene& scene);
 struct RunSettings {
   std::string output_dir;
   bool restart = false;
-  bool quiet = false;          // no progress line
+  bool quiet = false;          // errors, warnings and the final summary only (no banner, no progress)
+  double progress_interval_s = 60;  // wall seconds between progress lines when stderr is not a terminal
   std::string tool = "cgd-generate";
 };
 
