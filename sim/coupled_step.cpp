@@ -78,7 +78,7 @@ void CoupledStep::begin(const dem::Particles& particles) {
 }
 
 std::int64_t CoupledStep::substeps(std::int64_t step, std::int64_t steps_to_target) const {
-  const double dt_fluid_max = fluid_->max_dt(courant_, dt_fluid_cap_);
+  const double dt_fluid_max = max_fluid_dt();
   if (dt_fluid_max < dt_dem_s_)
     throw RunError("at step " + std::to_string(step) + " (t = " + std::to_string(static_cast<double>(step) * dt_dem_s_) +
                    " s) the fluid's Courant limit " + std::to_string(dt_fluid_max) + " s fell below one DEM step (" +

@@ -63,6 +63,10 @@ class CoupledStep {
   /// limit falls below one DEM step.
   std::int64_t substeps(std::int64_t step, std::int64_t steps_to_target) const;
 
+  /// The longest fluid step the current flow allows: min(Co dx / max|u|, viscous limit, drag cap), s.
+  /// Collective.
+  double max_fluid_dt() const { return fluid_->max_dt(courant_, dt_fluid_cap_); }
+
   /// One fluid step of n_sub DEM steps, the particle forces from its new level (held constant over the
   /// sub-steps, PerParticleDrive), and the n_sub DEM steps; `after_dem_step` runs after each one.
   void advance(dem::DemSystem& dem, std::int64_t n_sub, const std::function<void()>& after_dem_step);
