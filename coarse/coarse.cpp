@@ -68,6 +68,12 @@ SlipSummary summarise_run(const std::string& run_dir, double u_t, double start, 
   try {
     const double end = t.empty() ? start : t.back() * (1 + 1e-12) + 1e-300;  // the whole run after the start
     s.slip = window_average(t, slip, start, end, batches);
+    const int half_batches = std::max(2, batches / 2);
+    const double mid = 0.5 * (s.slip.start_s + s.slip.end_s);
+    const WindowAverage first = window_average(t, slip, start, mid, half_batches);
+    const WindowAverage second = window_average(t, slip, mid, end, half_batches);
+    s.drift = second.mean - first.mean;
+    s.drift_stderr = std::hypot(first.standard_error, second.standard_error);
   } catch (const std::invalid_argument& e) {
     throw InputError(path + ": cannot average the slip: " + e.what());
   }
@@ -76,6 +82,14 @@ SlipSummary summarise_run(const std::string& run_dir, double u_t, double start, 
   s.ranks = ranks;
   s.core_seconds_per_simulated_second = s.simulated_s > 0 ? s.wall_s * ranks / s.simulated_s : 0;
   return s;
+}
+
+SlipSummary summarise_reference(const std::string& run_dir, int batches) {
+  const std::string scene_path = (std::filesystem::path(run_dir) / "scene.toml").string();
+  if (!std::filesystem::exists(scene_path))
+    throw InputError("--reference " + run_dir + ": no scene.toml there (expected a run directory of cgd-generate)");
+  const Scene reference = load_scene(scene_path, {});
+  return summarise_run(run_dir, reference.derived.u_t_m_s, reference.run.sampling_start_s, 1, batches);
 }
 
 Comparison compare(const SlipSummary& coarse, const SlipSummary& reference) {
@@ -92,6 +106,10 @@ std::string describe(const SlipSummary& s) {
   o << "slip <u_slip,y>/u_t = " << num(s.slip.mean) << " +- " << num(s.slip.standard_error, 2) << " (batch means, "
     << s.slip.batches << " batches over " << num(s.slip.start_s) << "-" << num(s.slip.end_s) << " s); cost "
     << num(s.core_seconds_per_simulated_second) << " core-s per simulated s (" << s.ranks << " rank(s))";
+  if (!s.stationary())
+    o << "\nwarning: the window is not stationary: its second half averages " << num(s.drift, 3) << " +- "
+      << num(s.drift_stderr, 2) << " u_t above its first (beyond " << SlipSummary::kDriftSigmas
+      << " standard errors): the transient is not over; start sampling later (run.sampling_start_tref) or run longer";
   return o.str();
 }
 
@@ -118,6 +136,9 @@ void write_summary(const std::string& path, const Scene& scene, const SlipSummar
     f.set_attr(g, "window_start_s", s.slip.start_s);
     f.set_attr(g, "window_end_s", s.slip.end_s);
     f.set_attr(g, "batches", static_cast<std::int64_t>(s.slip.batches));
+    f.set_attr(g, "drift_over_ut", s.drift);
+    f.set_attr(g, "drift_stderr", s.drift_stderr);
+    f.set_attr(g, "stationary", static_cast<std::int64_t>(s.stationary()));
     f.set_attr(g, "simulated_s", s.simulated_s);
     f.set_attr(g, "wall_s", s.wall_s);
     f.set_attr(g, "ranks", static_cast<std::int64_t>(s.ranks));
@@ -126,6 +147,8 @@ void write_summary(const std::string& path, const Scene& scene, const SlipSummar
       f.set_attr(g, "reference", cmp->reference.run_dir);
       f.set_attr(g, "reference_slip_over_ut", cmp->reference.slip.mean);
       f.set_attr(g, "reference_slip_stderr", cmp->reference.slip.standard_error);
+      f.set_attr(g, "reference_window_start_s", cmp->reference.slip.start_s);
+      f.set_attr(g, "reference_window_end_s", cmp->reference.slip.end_s);
       f.set_attr(g, "relative_error", cmp->relative_error);
       f.set_attr(g, "relative_error_stderr", cmp->relative_error_stderr);
     }

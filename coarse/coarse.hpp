@@ -5,6 +5,7 @@
 // resolved reference run and the cost in core-seconds per simulated second).
 #include <mpi.h>
 
+#include <cmath>
 #include <optional>
 #include <string>
 
@@ -29,6 +30,14 @@ struct SlipSummary {
   std::string run_dir;
   double u_t_m_s = 0;
   WindowAverage slip;                 // <u_slip,y> / u_t over the sampling window
+  // Stationarity of the window: the mean of its second half minus that of its first (each half with
+  // batches/2 batch means) and the standard error of that difference. A coarse grid seeds its
+  // clustering instability from little noise (many particles per cell), so the homogeneous state can
+  // last tens of t_ref and the slip then climbs: a drift beyond kDriftSigmas standard errors says the
+  // window still holds the transient (start sampling later, run longer).
+  double drift = 0, drift_stderr = 0;
+  bool stationary() const { return std::abs(drift) <= kDriftSigmas * drift_stderr; }
+  static constexpr double kDriftSigmas = 3.0;
   double simulated_s = 0, wall_s = 0; // the whole run
   int ranks = 0;
   double core_seconds_per_simulated_second = 0;
@@ -39,6 +48,12 @@ struct SlipSummary {
 /// series is missing or the window holds too few rows.
 SlipSummary summarise_run(const std::string& run_dir, double u_t_m_s, double sampling_start_s, int ranks,
                           int batches = 10);
+
+/// The resolved reference's summary over its own sampling window: the same definition (from the
+/// reference scene's run.sampling_start, default 15 t_ref, to the end of its run) with the reference's
+/// own scene (RUN_DIR/scene.toml) and u_t, so that a coarse run may sample later and longer than the
+/// resolved run it is compared with. InputError if the scene or the series cannot be read.
+SlipSummary summarise_reference(const std::string& run_dir, int batches = 10);
 
 /// The comparison of a coarse run with a resolved reference.
 struct Comparison {

@@ -57,7 +57,7 @@ int main(int argc, char** argv) {
         const auto s = cgd::coarse::summarise_run(settings.output_dir, u_t, scene.run.sampling_start_s, ranks, batches);
         std::optional<cgd::coarse::Comparison> cmp;
         if (!reference.empty())
-          cmp = cgd::coarse::compare(s, cgd::coarse::summarise_run(reference, u_t, scene.run.sampling_start_s, 1, batches));
+          cmp = cgd::coarse::compare(s, cgd::coarse::summarise_reference(reference, batches));
         // "model": the file is in the scene's drag_model; "model-raw": the model with c_corr off (parcel fit)
         std::string drag = to_string(scene.fluid->drag);
         if (scene.fluid->drag == cgd::DragLaw::Model && !scene.fluid->parcel_correction) drag = "model-raw";

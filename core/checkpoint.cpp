@@ -1,4 +1,4 @@
-// checkpoint.h5 (docs/schema-run.md, "checkpoint.h5"): writing and reading a run's restart state.
+// checkpoint.h5 (docs/schema-run.md, "Checkpoint"): writing and reading a run's restart state.
 #include "core/checkpoint.hpp"
 
 #include "core/output.hpp"

@@ -1,5 +1,5 @@
 #pragma once
-// checkpoint.h5 of a run directory (docs/schema-run.md, "checkpoint.h5"): everything a restart needs to
+// checkpoint.h5 of a run directory (docs/schema-run.md, "Checkpoint"): everything a restart needs to
 // continue a run bit for bit -- the DEM state (unwrapped positions, leapfrog velocities, the contact
 // histories keyed by partner id), the neighbour-list bookkeeping, the fluid state and the run's own
 // bookkeeping (wall time, phase timers, snapshot frames). The one place that knows its layout; the

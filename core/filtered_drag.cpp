@@ -203,7 +203,7 @@ DragModel load_drag_model(const std::string& path) {
   m.u_t_convention = f.attr_string("/", "u_t_convention");
   if (m.u_t_convention != kUtConvention)
     throw InputError(path + ": u_t_convention = \"" + m.u_t_convention + "\": this build uses \"" +
-                     kUtConvention + "\" (models.md)");
+                     kUtConvention + "\" (docs/models.md)");
   m.u_t_m_s = f.attr_double("/", "u_t_m_s");
   m.l_char_m = f.attr_double("/", "l_char_m");
   m.phi_crit = f.attr_double("/", "phi_crit");

@@ -2,11 +2,11 @@
 // Filtered (coarse-grid) drag laws as evaluators, like the microscopic laws of core/drag.hpp.
 //
 // Model (Radl & Sundaresan 2014, Chem. Eng. Sci. 117:416, the journal version of the paper's eqs. 6-9;
-// models.md, "Filtered drag model"):
+// docs/models.md, "Filtered drag model"):
 //   beta_bar_p = c_corr(alpha) [1 - h(phi) / (1 + a(phi) F)] beta_p,micro(phi, |u - v|),
 //   F = L_char / Delta,   Delta = cube root of the fluid cell volume of the run using the law,
 //   c_corr(alpha) = a_c + (1 - a_c) exp(-k_c (alpha - 1)),   alpha = d_parcel / d_prim,
-// phi the solids fraction at the particle, L_char = (u_t^2/g) Fr_p^(-2/3) with models.md's u_t
+// phi the solids fraction at the particle, L_char = (u_t^2/g) Fr_p^(-2/3) with docs/models.md's u_t
 // (Schiller-Naumann). The correction factor depends on phi only, not on the slip, so the filtered
 // law keeps every property of its microscopic base law that the engine relies on (beta_p w increasing
 // in w; beta_p(w) >= beta_p(0)), and 0 < beta_bar <= beta_micro when 0 <= h < 1, a > 0, alpha >= 1,
@@ -67,7 +67,7 @@ struct DragModel {
   std::string path;      // as given
   std::string checksum;  // FNV-1a 64-bit of the file's bytes, 16 hex digits
   DragLaw base_law = DragLaw::Beetstra;
-  std::string u_t_convention;  // "schiller-naumann" (models.md)
+  std::string u_t_convention;  // "schiller-naumann" (docs/models.md)
   double u_t_m_s = 0, l_char_m = 0, phi_crit = 0.016;
   double diameter_m = 0, particle_density_kg_m3 = 0, fluid_density_kg_m3 = 0, fluid_viscosity_Pa_s = 0;
   double gravity_m_s2 = 0;  // |g|
@@ -119,7 +119,7 @@ struct FilteredDrag {
 struct FilteredDragSetup {
   std::shared_ptr<const DragModel> model;  // required for DragLaw::Model
   double filter_width_m = 0;               // Delta: cube root of the fluid cell volume
-  double l_char_m = 0;                     // L_char of the run (models.md convention)
+  double l_char_m = 0;                     // L_char of the run (docs/models.md convention)
   double parcel_size = 1;                  // alpha
   bool parcel_correction = true;           // false: c_corr = 1 (fluid.parcel_correction = false)
 };
@@ -180,7 +180,7 @@ DragModel load_drag_model(const std::string& path);
 /// cannot be based on another filtered law).
 void check_model_matches_scene(const DragModel& model, const Scene& scene);
 
-/// "schiller-naumann": the u_t convention of models.md that every cgd file uses.
+/// "schiller-naumann": the u_t convention of docs/models.md that every cgd file uses.
 inline constexpr const char* kUtConvention = "schiller-naumann";
 
 }  // namespace cgd

@@ -25,7 +25,7 @@ struct PeriodicGrid {
   }
   double edge_m(int axis) const { return cells[axis] * spacing_m[axis]; }
   double cell_volume_m3() const { return spacing_m[0] * spacing_m[1] * spacing_m[2]; }
-  /// Cube root of the cell volume: "the" cell size of models.md (Delta_fluid).
+  /// Cube root of the cell volume: "the" cell size of docs/models.md (Delta_fluid).
   double cell_size_m() const { return std::cbrt(cell_volume_m3()); }
   /// Position along `axis` in cell units, wrapped into [0, n): s = (x - origin)/h mod n.
   double wrapped_cell_coordinate(double x_m, int axis) const {

@@ -1,5 +1,5 @@
 #pragma once
-// series.h5 of a run directory (docs/schema-run.md, "series.h5"): the time-series table (Series, any
+// series.h5 of a run directory (docs/schema-run.md, "Series"): the time-series table (Series, any
 // columns) and the columns a run of cgd-generate / cgd-coarse writes (RunSeriesRow). The one place that
 // knows those column names, their units and their order; readers (the coarse summary, tools/) find a
 // column by its name.

@@ -66,7 +66,7 @@ class SummedVolumeTable {
 /// (cell units, 0 <= s < n).
 AxisOperator axis_operator(double s, double width_cells, int n);
 
-/// The filtered quantities at one point (models.md "Filtering", the paper's eqs. 4-5).
+/// The filtered quantities at one point (docs/models.md "Filtering", the paper's eqs. 4-5).
 struct FilteredPoint {
   double void_fraction = 0;            // filter(eps)
   std::array<double, 3> velocity{};    // Favre: filter(eps u) / filter(eps), m/s

@@ -1,6 +1,6 @@
 #pragma once
 // cgd-filter's library: filtered slip and filtered drag coefficient of resolved runs, per filter
-// width, binned by the filtered solids fraction (the paper's eqs. 4-5; models.md "Filtering").
+// width, binned by the filtered solids fraction (the paper's eqs. 4-5; docs/models.md "Filtering").
 //
 // For every particle i of every snapshot and every filter width Delta (a cube of edge Delta centred
 // on the particle, on the periodic grid, exact for the cell values: filter/box_filter.hpp):

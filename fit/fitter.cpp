@@ -465,7 +465,7 @@ FitResult fit_filtered_drag(const std::vector<FilteredFile>& files, const FitOpt
   M.particle_density_kg_m3 = p.particle_density_kg_m3;
   M.fluid_density_kg_m3 = p.fluid_density_kg_m3;
   M.fluid_viscosity_Pa_s = p.fluid_viscosity_Pa_s;
-  // |g| from L_char = d_p Fr_p^(1/3), Fr_p = u_t^2/(g d_p) (models.md)
+  // |g| from L_char = d_p Fr_p^(1/3), Fr_p = u_t^2/(g d_p) (docs/models.md)
   M.gravity_m_s2 = p.u_t_m_s * p.u_t_m_s / (p.diameter_m * std::pow(p.l_char_m / p.diameter_m, 3));
   M.h_spline = main.h.spline;
   M.log_a_spline = main.log_a.spline;

@@ -1,7 +1,7 @@
 #pragma once
 // cgd-fit's fit (docs/fit.md): master curves h(phi), a(phi) of the filtered drag model
 //   H(F, phi) = h(phi) / (1 + a(phi) F),   F = L_char / Delta_filter,   beta_bar / beta_micro = 1 - H
-// (Radl & Sundaresan 2014, Chem. Eng. Sci. 117:416; models.md "Filtered drag model") from filtered files.
+// (Radl & Sundaresan 2014, Chem. Eng. Sci. 117:416; docs/models.md "Filtered drag model") from filtered files.
 //
 //  1. per phi bin: (h, log a) by weighted nonlinear least squares over every width of every file,
 //       min sum_w ((H_w - h/(1 + a F_w)) / sigma_w)^2,  sigma_w = (H_high - H_low)/(2 * 1.96)

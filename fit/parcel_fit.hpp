@@ -1,5 +1,5 @@
 #pragma once
-// The parcel fit (the paper's eq. 9; models.md "Parcels"): c_corr(alpha) = a + (1 - a) exp(-k (alpha - 1))
+// The parcel fit (the paper's eq. 9; docs/models.md "Parcels"): c_corr(alpha) = a + (1 - a) exp(-k (alpha - 1))
 // learnt from coarse CFD-DPM runs that used the grid model with c_corr switched off
 // (fluid.parcel_correction = false), each compared with its resolved reference (cgd-coarse --reference).
 //

@@ -16,7 +16,7 @@
 
 namespace cgd {
 
-/// Periodic sedimentation driving of a scene that solves the fluid (models.md "Periodic sedimentation
+/// Periodic sedimentation driving of a scene that solves the fluid (docs/models.md "Periodic sedimentation
 /// driving"). A mean pressure gradient G is removed from the solved pressure; the fluid gets the body
 /// force eps (rho_f g - G) and each particle m g - V_p G when the pressure-gradient force is on (m g
 /// alone when it is off), chosen so that the fluid carries what the coupling makes it carry:

@@ -330,7 +330,7 @@ class RunDriver {
     r.step = step;
     r.solids_fraction = static_cast<double>(d.particles) * std::pow(scene_.particles.parcel_size, 3) *
                         scene_.derived.particle_volume_m3 / volume;
-    // slip = <eps u>/<eps> - <phi v>/<phi> (models.md); a quiescent fluid has u = 0
+    // slip = <eps u>/<eps> - <phi v>/<phi> (docs/models.md); a quiescent fluid has u = 0
     for (int c = 0; c < 3; ++c) r.slip_velocity_m_s[c] = avg.fluid_velocity[c] - d.velocity_mean[c];
     r.fluid_velocity_mean_m_s = avg.fluid_velocity;
     r.particle_velocity_mean_m_s = d.velocity_mean;
@@ -713,7 +713,7 @@ class RunDriver {
   /// overlap_warning_fraction of numerics.overlap_limit: say so on stderr and in the series, with the
   /// contact stiffness that would keep it below, and checkpoint at the next chance (a state before the
   /// likely failure). The peak overlap of an impact at speed v is v sqrt(m_eff/k_n), so it scales as
-  /// k_n^(-1/2), i.e. linearly with gamma* (models.md: k_n ~ gamma*^-2).
+  /// k_n^(-1/2), i.e. linearly with gamma* (docs/models.md: k_n ~ gamma*^-2).
   void warn_if_overlap_high() {
     if (overlap_warned_) return;
     const NumericsConfig& nm = scene_.numerics;

@@ -87,7 +87,7 @@ cat >"$tmp/check.py" <<'PYEOF'
 * no NaN/Inf in any series column or in any snapshot array (particles, fluid);
 * bounded kinetic energy. The only energy source of the periodic sedimenting box is the driving
   (gravity less the removed mean pressure gradient rho_mix g). With zero total momentum its power is
-  P = (rho_p - rho_f) phi (1 - phi) V |g| u_slip (the buoyant weight times the slip along -g; models.md
+  P = (rho_p - rho_f) phi (1 - phi) V |g| u_slip (the buoyant weight times the slip along -g; docs/models.md
   driving and slip), and drag, contacts and viscosity only dissipate. So
       E(t) = KE_p + KE_rot + KE_fluid  <=  E(0) + int_0^t P dt'
   (contact spring energy >= 0 is left out of E: that only makes the bound looser). Tolerance 5 % of

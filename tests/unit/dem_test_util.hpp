@@ -25,7 +25,7 @@ inline V3 normalized(V3 a) {
   return (1.0 / norm(a)) * a;
 }
 
-/// The paper's particles (models.md, Table 1): d = 75 um, rho_p = 1500 kg/m^3.
+/// The paper's particles (docs/models.md, Table 1): d = 75 um, rho_p = 1500 kg/m^3.
 struct PaperParticle {
   double d = 75e-6;                                        // m
   double rho = 1500.0;                                     // kg/m^3
@@ -107,7 +107,7 @@ inline double zero_crossing(double before, double after, std::size_t k) {
 }
 
 /// Exact continuous-time head-on collision of the linear spring-dashpot with the no-attraction clip
-/// (models.md: F_n = max(0, k_n delta - gamma_n v_n)). With beta = gamma_n/(2 m_eff) and omega the
+/// (docs/models.md: F_n = max(0, k_n delta - gamma_n v_n)). With beta = gamma_n/(2 m_eff) and omega the
 /// damped frequency, the overlap obeys delta = (v0/omega) e^{-beta t} sin(omega t) until the force
 /// k delta + gamma delta' vanishes, i.e. until delta'' = 0, at omega t* = theta* = pi - atan(2 beta
 /// omega / (omega^2 - beta^2)). There |delta'| = v0 e^{-beta t*} (the bracket cos - (beta/omega) sin

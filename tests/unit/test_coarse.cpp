@@ -3,11 +3,13 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <filesystem>
 #include <random>
 
 #include "coarse/coarse.hpp"
 #include "core/error.hpp"
 #include "core/filtered_drag.hpp"
+#include "core/output.hpp"
 #include "core/scene.hpp"
 #include "core/time_average.hpp"
 
@@ -99,6 +101,43 @@ TEST(CoarseChecks, ParcelCorrectionSwitchedOffGivesTheGridModelAlone) {
   EXPECT_NEAR(b_on / b_off, std::exp(-0.05 * 3), 1e-14);
   s_off.parcel_size = 1;
   EXPECT_DOUBLE_EQ(beta_p(DragLaw::Radl2014, p, s_off, 0.1, 0.2), b_off);
+}
+
+TEST(CoarseSummary, FlagsAWindowThatStillHoldsTheTransient) {
+  // A coarse run's slip: stationary noise around 0.8 u_t, and the same noise on a climb from 0.8 to 1.1
+  // u_t across the window (a clustering instability still growing). The halves of the climbing window
+  // differ by 0.15 u_t against a standard error of ~0.003: flagged; the stationary one is not (its
+  // drift is noise, within 3 standard errors but for a 0.3 % chance).
+  const Scene scene = load_scene_from_string(coarse_scene("parcel_size = 4", "", ""), "ok.toml");
+  const double u_t = scene.derived.u_t_m_s;
+  auto write = [&](const std::string& dir, bool climbing) {
+    std::filesystem::create_directories(dir);
+    schema::Series series;
+    series.add_column("time", 1, "s");
+    series.add_column("slip_velocity", 3, "m/s");
+    series.add_column("wall_seconds", 1, "s");
+    std::mt19937_64 rng(7);
+    std::normal_distribution<double> noise(0.0, 0.02);
+    for (int i = 0; i < 4000; ++i) {
+      const double t = 1e-3 * i;
+      const double trend = climbing && t >= 1.0 ? 0.3 * (t - 1.0) / 3.0 : 0.0;
+      series.append({t, 0.0, (0.8 + trend + noise(rng)) * u_t, 0.0, 0.01 * i});
+    }
+    series.write(dir + "/series.h5", MPI_COMM_SELF, scene);
+  };
+  const std::string base = ::testing::TempDir() + "cgd_coarse_summary";
+  std::filesystem::remove_all(base);
+  write(base + "/flat", false);
+  write(base + "/climb", true);
+  const coarse::SlipSummary flat = coarse::summarise_run(base + "/flat", u_t, 1.0, 1);
+  const coarse::SlipSummary climb = coarse::summarise_run(base + "/climb", u_t, 1.0, 1);
+  EXPECT_NEAR(flat.slip.mean, 0.8, 0.005);
+  EXPECT_TRUE(flat.stationary()) << flat.drift << " +- " << flat.drift_stderr;
+  EXPECT_NEAR(climb.drift, 0.15, 0.01);
+  EXPECT_FALSE(climb.stationary());
+  EXPECT_NE(coarse::describe(climb).find("not stationary"), std::string::npos);
+  EXPECT_EQ(coarse::describe(flat).find("not stationary"), std::string::npos);
+  std::filesystem::remove_all(base);
 }
 
 }  // namespace

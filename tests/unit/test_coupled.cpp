@@ -58,7 +58,7 @@ class TempDir {
   fs::path path_;
 };
 
-/// Base scene of these tests: air and 75 um, 1500 kg/m^3 particles (models.md's Table 1), periodic box,
+/// Base scene of these tests: air and 75 um, 1500 kg/m^3 particles (docs/models.md's Table 1), periodic box,
 /// two-way coupling; everything else comes as overrides. Contacts are soft (t_c = 0.3 ms, k_n = 0.018
 /// N/m for two primaries): the mean slip of a suspension does not depend on them (contacts are internal
 /// forces), and the DEM step t* t_c = 6 us keeps the tests short. Restitution 0.9, no friction.
@@ -155,7 +155,7 @@ double time_average(const cgd::schema::Series& s, const std::string& name, int w
 // fluxes that are shared by two control volumes, so their sum over a periodic box vanishes to round-off
 // for any eps field. With B = 0 and f = 0 the only net force left on the fluid is the pressure term
 // -eps_f G p, which does not sum to zero where eps varies (its counterpart is the particles' -V_p grad p,
-// models.md eq. 3). So over each step
+// docs/models.md eq. 3). So over each step
 //     P^{n+1} - P^n = -dt sum_faces eps_f (G p^{n+1}) V_cell,   P = sum rho eps_f u V_cell,
 // exactly in exact arithmetic (eps static, so eps_f is the same at both levels). The test integrates
 // the defect of this balance over the run. The old form eps_f div(tau) leaves O(mu grad eps . grad u)
@@ -245,8 +245,8 @@ TEST(FluidViscousFlux, MomentumBalanceClosesWithVariableVoidFraction) {
 
 // ---- (1) one particle settles at the terminal velocity ----------------------------------------------
 // One particle (solids_fraction = V_p / V_box, so round(phi V/V_p) = 1) in a periodic box with Wen-Yu drag:
-// at eps -> 1 it is Schiller-Naumann, so the terminal slip is models.md's u_t = 0.2185 m/s (Re_p 1.18).
-// Reported: the domain-average slip of models.md, <eps u>/<eps> - v (series column slip_velocity), and
+// at eps -> 1 it is Schiller-Naumann, so the terminal slip is docs/models.md's u_t = 0.2185 m/s (Re_p 1.18).
+// Reported: the domain-average slip of docs/models.md, <eps u>/<eps> - v (series column slip_velocity), and
 // the slip the drag law sees, u_p - v (u_p interpolated at the particle, snapshot's fluid_velocity).
 //
 // What separates them is the particle's own disturbance of the fluid: the fluid gets -F_d spread by the
@@ -304,7 +304,7 @@ SettlingResult settle_one_particle(double box_dp, double cell_dp, const std::str
 }
 
 TEST(Coupled, SingleParticleReachesTerminalVelocity) {
-  // models.md's u_t is what the scene derives and what Wen-Yu gives at phi = 0
+  // docs/models.md's u_t is what the scene derives and what Wen-Yu gives at phi = 0
   const cgd::Scene base = make_scene({});
   const double u_t = cgd::terminal_velocity(cgd::DragLaw::WenYu, {1.3, 1.8e-5, 75e-6}, 1500.0, 9.81);
   EXPECT_NEAR(base.derived.u_t_m_s, u_t, 1e-12 * u_t);
@@ -436,7 +436,7 @@ TEST(Coupled, NoPressureGradientForceMeansNoBuoyancy) {
 // A 12 d_p box (3 L_char; 4 cells of 3 d_p, dx_over_dp = 3.33) at phi = 0.1 and 0.3 with Beetstra and
 // Wen-Yu, from rest. The mean particle momentum balance in a homogeneous state is
 //     <beta_p (u_p - v)> = (rho_p - rho_mix) g = eps (rho_p - rho_f) g,
-// (the mean of the perturbation pressure gradient vanishes), i.e. models.md's balance, whose root is
+// (the mean of the perturbation pressure gradient vanishes), i.e. docs/models.md's balance, whose root is
 // homogeneous_slip_over_ut. Time scales: the mean slip settles within ~2 ms (the light fluid follows in
 // rho_f eps/(phi beta) ~ 0.1 ms; the particles relax in tau = slip/(eps g') = 5-18 ms, but start from rest
 // with the fluid, so the slip itself is set by the fast fluid response).
@@ -506,7 +506,7 @@ TEST(Coupled, HomogeneousSuspensionMatchesDragBalance) {
 // ---- (3) mixture momentum -------------------------------------------------------------------------------
 // Every force in the coupled system has its counterpart, so the total momentum
 //     P = sum_p m v_p + sum_faces rho_f eps_f u V_cell
-// is conserved to round-off (models.md's periodic driving makes the net external force zero):
+// is conserved to round-off (docs/models.md's periodic driving makes the net external force zero):
 //   * drag: the fluid gets dt sum B_f (V_f - u_f^{n+1}) V_cell, the particles dt sum beta V_p
 //     (u_p^{n+1} - v): equal and opposite because face values are means of the two cells, cell-centred u
 //     the mean of the two faces, and deposition and interpolation are transposes (coupler.hpp);
@@ -518,7 +518,7 @@ TEST(Coupled, HomogeneousSuspensionMatchesDragBalance) {
 //   * the driving: eps (rho_f - rho_mix) g on the fluid, (rho_p - rho_mix) V_p g on the particles, summing
 //     to (<eps> rho_f + <phi> rho_p - rho_mix) g V_box = 0;
 //   * advection and viscosity are differences of shared fluxes (test (0)), contacts are pairwise.
-// With models.md's eps div(tau) instead of div(eps tau) this case drifts by 2.6e-12 kg m/s over the 300
+// With docs/models.md's eps div(tau) instead of div(eps tau) this case drifts by 2.6e-12 kg m/s over the 300
 // steps, 5.6 % of the largest fluid momentum (1.7e-4 of the scale below); with div(eps tau), 6e-24.
 // The particles' momentum is taken from the leapfrog velocities v_{n-1/2} at fluid-step boundaries
 // (DemSystem::diagnostics(false)), the velocities the drag used; the fluid's right after its step, with
@@ -614,7 +614,7 @@ TEST(Coupled, MixtureMomentumConserved) {
 
 }  // namespace
 
-// ---- (6) parcels (models.md "Parcels"; docs/coarse.md) ---------------------------------------------------
+// ---- (6) parcels (docs/models.md "Parcels"; docs/coarse.md) ---------------------------------------------------
 namespace {
 
 // A lone parcel of size alpha: drag alpha^3 V_p beta_p(phi, w) w with beta_p evaluated with the primary
@@ -647,7 +647,7 @@ TEST(Parcels, LoneParcelSettlesAtThePrimaryTerminalVelocity) {
   }
 }
 
-// A homogeneous suspension of parcels: per primary volume the balance is the primaries' (models.md),
+// A homogeneous suspension of parcels: per primary volume the balance is the primaries' (docs/models.md),
 // beta_p(phi, w) w = eps (rho_p - rho_f) g, so the slip is the drag-law balance at <phi> whatever alpha.
 // The same setting and tolerance (2 %) as HomogeneousSuspensionMatchesDragBalance, alpha = 2 in a
 // 30 d_p box on 5 d_p cells (6 x 6 x 6, 645 parcels at phi = 0.1: ~3 parcels per cell, so the void
@@ -667,7 +667,7 @@ TEST(Parcels, HomogeneousParcelSuspensionMatchesDragBalance) {
   EXPECT_NEAR(slip / expected, 1.0, 0.02);
 }
 
-// Parcel contacts (models.md "Parcels"): k_n,parcel = alpha k_n with the parcel mass alpha^3 m, gamma_n
+// Parcel contacts (docs/models.md "Parcels"): k_n,parcel = alpha k_n with the parcel mass alpha^3 m, gamma_n
 // from the same restitution, so for any alpha
 //   e = exp(-beta pi / omega) is the scene's restitution,       beta = gamma_n/(2 m_eff), omega the damped frequency;
 //   t_c / (d / v) and the relative overlap v / (omega d) are alpha-independent (t_c, d both ~ alpha).

@@ -1,4 +1,4 @@
-// Binary collisions of the soft-sphere contact (models.md "Soft-sphere contact", sim/dem/contact.hpp:
+// Binary collisions of the soft-sphere contact (docs/models.md "Soft-sphere contact", sim/dem/contact.hpp:
 // linear spring-dashpot, no attraction, tangential history spring with Coulomb slider) against the
 // analytic solutions of the model, run through the whole engine (DemSystem: neighbour list, fused
 // leapfrog kernel). Two equal spheres of the paper (d = 75 um, rho_p = 1500 kg/m^3, k_n = 1.27 N/m,
@@ -6,7 +6,7 @@
 // their centre of mass at rest; every step's state is recorded between advance() and commit().
 // Expected values are the exact continuous-time solutions of the model as specified, including its
 // no-attraction clip F_n >= 0 (dem_test_util.hpp: clipped_collision): the clip ends the contact force
-// before the overlap ends, so the restitution exceeds the nominal e that models.md's gamma_n(e)
+// before the overlap ends, so the restitution exceeds the nominal e that docs/models.md's gamma_n(e)
 // formula assumes (+0.225 % at e = 0.9, +10 % at e = 0.5).
 //
 // Discretisation errors that set the tolerances (omega = damped contact frequency, beta = gamma_n /
@@ -149,7 +149,7 @@ TEST(DemBinaryCollision, HeadOnRestitutionAndContactTime) {
           EXPECT_NEAR(relative_error(e_measured, model.restitution), 0.0, 5e-3);
           EXPECT_NEAR(relative_error(run.contact_time_s, model.overlap_time_s), 0.0, 5e-3);
           if (s.restitution >= 0.9) {
-            // Against the nominal e and t_c of models.md: the clip raises e by 0.225 % at e = 0.9
+            // Against the nominal e and t_c of docs/models.md: the clip raises e by 0.225 % at e = 0.9
             // (0.002 % at 0.99) and shortens the overlap by < 2e-5, so with the discretisation above
             // both stay within 0.5 % (at e = 0.5 the clip alone raises e by 10 %: see the printout).
             EXPECT_NEAR(relative_error(e_measured, s.restitution), 0.0, 5e-3);

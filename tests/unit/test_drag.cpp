@@ -1,12 +1,12 @@
-// Microscopic drag laws (core/drag.hpp) against models.md: pinned beta_p values, the Re -> 0 and
+// Microscopic drag laws (core/drag.hpp) against docs/models.md: pinned beta_p values, the Re -> 0 and
 // phi -> 0 limits, the Wen-Yu Re = 1000 switch, terminal velocities and the homogeneous settling table.
 //
 // Every reference number below was computed independently of the C++ code, with mpmath at 40 digits
-// from the formulas typed afresh from models.md (the Beetstra bracket in its original form, with
+// from the formulas typed afresh from docs/models.md (the Beetstra bracket in its original form, with
 // Re^-0.343 and Re^-(1+4phi)/2, i.e. not the rewritten form the code uses). Script (python3, mpmath 1.2):
 //
 // clang-format off
-//   from mpmath import mp, mpf, sqrt, findroot   # formulas typed from models.md; 40 digits, no rewriting
+//   from mpmath import mp, mpf, sqrt, findroot   # formulas typed from docs/models.md; 40 digits, no rewriting
 //   mp.dps = 40
 //   rho_f, mu, d, rho_p, g = mpf('1.3'), mpf('1.8e-5'), mpf('75e-6'), mpf(1500), mpf('9.81')
 //   def beetstra(phi, w):
@@ -56,7 +56,7 @@ using cgd::SchillerNaumannDrag;
 using cgd::StokesDrag;
 using cgd::WenYuDrag;
 
-// The paper's case (models.md, Table 1).
+// The paper's case (docs/models.md, Table 1).
 constexpr double kRhoF = 1.3, kMuF = 1.8e-5, kD = 75e-6, kRhoP = 1500.0, kG = 9.81;
 const DragParams kParams{kRhoF, kMuF, kD};
 constexpr double kStokesBeta = 18.0 * kMuF / (kD * kD);  // 57600 kg m^-3 s^-1
@@ -257,11 +257,11 @@ TEST(DragSettling, TerminalVelocityOfWenYuAndSchillerNaumannIsTheReferenceScale)
               1e-12 * u_t_scales);
   EXPECT_NEAR(cgd::terminal_velocity(DragLaw::WenYu, kParams, kRhoP, kG), u_t_scales, 1e-12 * u_t_scales);
   EXPECT_NEAR(u_t_scales, kUtSchillerNaumann, 1e-12 * kUtSchillerNaumann);
-  EXPECT_NEAR(u_t_scales, 0.2185, 5e-5);  // models.md's printed value
+  EXPECT_NEAR(u_t_scales, 0.2185, 5e-5);  // docs/models.md's printed value
 }
 
 TEST(DragSettling, TerminalVelocityOfBeetstraAndStokes) {
-  // Beetstra 0.23200063568124877 (models.md quotes 0.232 for CFDEMcoupling), Stokes
+  // Beetstra 0.23200063568124877 (docs/models.md quotes 0.232 for CFDEMcoupling), Stokes
   // (rho_p - rho_f) g d^2 / (18 mu_f) = 0.25524734375 exactly. Solver tolerance 1e-14: 1e-12 relative.
   EXPECT_NEAR(cgd::terminal_velocity(DragLaw::Beetstra, kParams, kRhoP, kG), 0.23200063568124877,
               1e-12 * 0.232);
@@ -273,7 +273,7 @@ TEST(DragSettling, TerminalVelocityOfBeetstraAndStokes) {
 
 struct SettlingRow {
   double phi;
-  double beetstra_table, wen_yu_table;  // models.md, printed to 3 digits
+  double beetstra_table, wen_yu_table;  // docs/models.md, printed to 3 digits
   double beetstra, wen_yu;              // mpmath, normalised by kUtSchillerNaumann
 };
 // clang-format off
@@ -302,7 +302,7 @@ TEST(DragSettling, HomogeneousSlipMatchesIndependentSolve) {
 
 TEST(DragSettling, HomogeneousSlipReproducesTheTableOfModelsMd) {
   // The printed table is reproduced to its 3 digits (+-0.0005 rounding, 0.0006 with margin) only when
-  // normalised by u_t = 0.219 m/s, i.e. models.md's 0.2185 rounded once more: solving for the u_t that
+  // normalised by u_t = 0.219 m/s, i.e. docs/models.md's 0.2185 rounded once more: solving for the u_t that
   // fits all twelve entries gives [0.21896, 0.21907] m/s (mpmath). With the exact Schiller-Naumann
   // u_t = 0.218461 the entries differ from the table by up to 0.0026 (Wen-Yu, phi = 0.02): see
   // HomogeneousSlipMatchesIndependentSolve for those values.

@@ -3,7 +3,7 @@
 // and the engine running a homogeneous suspension with a filtered law.
 //
 // Reference numbers were computed with mpmath at 40 digits from the formulas typed afresh: the Radl
-// 2014 pieces from data/reference/radl2014-filtered-drag.csv, the Beetstra law from models.md, and
+// 2014 pieces from data/reference/radl2014-filtered-drag.csv, the Beetstra law from docs/models.md, and
 // beta_bar = exp(-0.05 (alpha - 1)) [1 - h/(1 + a F)] beta_Beetstra (c_corr with the paper's a = 0,
 // k = 0.05). Script (python3, mpmath 1.2):
 // clang-format off

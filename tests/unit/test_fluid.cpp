@@ -1,4 +1,4 @@
-// Verification of the fluid solver (sim/fluid, model A of models.md) against known answers:
+// Verification of the fluid solver (sim/fluid, model A of docs/models.md) against known answers:
 // the Taylor–Green vortex and its order of convergence, the exactness of the FFT preconditioner, the
 // continuity of a variable-eps step with strong drag, the implicit drag update, momentum conservation
 // and free-stream preservation. Single process (the slab decomposition is tested in tests/mpi).
