@@ -10,7 +10,8 @@ void write(const std::string& path, MPI_Comm comm, const Scene& scene, const Run
   int ranks = 1;
   MPI_Comm_size(comm, &ranks);
   const std::int64_t n = particles.count, m = particles.contact_rows;
-  std::vector<std::int64_t> counts(static_cast<std::size_t>(ranks)), contact_counts(static_cast<std::size_t>(ranks));
+  std::vector<std::int64_t> counts(static_cast<std::size_t>(ranks)),
+      contact_counts(static_cast<std::size_t>(ranks));
   MPI_Allgather(&n, 1, MPI_INT64_T, counts.data(), 1, MPI_INT64_T, comm);
   MPI_Allgather(&m, 1, MPI_INT64_T, contact_counts.data(), 1, MPI_INT64_T, comm);
   std::vector<std::int64_t> frame_steps, frame_counts;
@@ -41,7 +42,8 @@ void write(const std::string& path, MPI_Comm comm, const Scene& scene, const Run
     file.write_rows("/particles/id", particles.id, n, 1);
     file.write_rows("/particles/position", particles.position, n, 3);
     file.write_rows("/particles/velocity", particles.velocity, n, 3);
-    if (particles.angular_velocity) file.write_rows("/particles/angular_velocity", particles.angular_velocity, n, 3);
+    if (particles.angular_velocity)
+      file.write_rows("/particles/angular_velocity", particles.angular_velocity, n, 3);
     file.write_rows("/particles/contact_count", particles.contact_count, n, 1);
     file.create_group("/contacts");
     file.write_rows("/contacts/partner", particles.partner, m, 1);
@@ -76,7 +78,9 @@ Reader::Reader(const std::string& path, MPI_Comm comm) : file_(h5::File::open_re
   contact_counts_ = file_.attr_ints("/", "rank_contact_counts");
 }
 
-bool Reader::has_angular_velocity() const { return file_.exists("/particles/angular_velocity"); }
+bool Reader::has_angular_velocity() const {
+  return file_.exists("/particles/angular_velocity");
+}
 
 ParticleData Reader::particles(std::int64_t first, std::int64_t count, std::int64_t contact_first,
                                std::int64_t contact_count, bool rotation) const {
@@ -91,9 +95,15 @@ ParticleData Reader::particles(std::int64_t first, std::int64_t count, std::int6
   return d;
 }
 
-bool Reader::has_fluid() const { return file_.exists("/fluid"); }
-double Reader::fluid_dt_previous_s() const { return file_.attr_double("/fluid", "dt_previous"); }
-std::int64_t Reader::fluid_steps() const { return file_.attr_int("/fluid", "steps"); }
+bool Reader::has_fluid() const {
+  return file_.exists("/fluid");
+}
+double Reader::fluid_dt_previous_s() const {
+  return file_.attr_double("/fluid", "dt_previous");
+}
+std::int64_t Reader::fluid_steps() const {
+  return file_.attr_int("/fluid", "steps");
+}
 
 void Reader::read_fluid_field(std::size_t field, std::int64_t first, std::int64_t count, double* out) const {
   const std::vector<double> data =
@@ -101,6 +111,8 @@ void Reader::read_fluid_field(std::size_t field, std::int64_t first, std::int64_
   std::copy(data.begin(), data.end(), out);
 }
 
-void Reader::close() { file_.close(); }
+void Reader::close() {
+  file_.close();
+}
 
 }  // namespace cgd::checkpoint

@@ -27,12 +27,12 @@ struct Frame {
 struct RunState {
   std::int64_t step = 0;
   double time_s = 0;
-  double displacement_bound_m = 0;   // bound on any particle's displacement since the last list build
-  bool rebuild_due = false;          // the neighbour list must be rebuilt before the next step
-  std::int64_t last_sort_step = 0;   // step of the last reordering by cell
+  double displacement_bound_m = 0;  // bound on any particle's displacement since the last list build
+  bool rebuild_due = false;         // the neighbour list must be rebuilt before the next step
+  std::int64_t last_sort_step = 0;  // step of the last reordering by cell
   std::int64_t neighbor_rebuilds = 0;
-  double wall_seconds = 0;           // wall time of the whole run so far (all sessions)
-  std::vector<double> phase_seconds; // per phase timer, the whole run so far (DEM phases first)
+  double wall_seconds = 0;            // wall time of the whole run so far (all sessions)
+  std::vector<double> phase_seconds;  // per phase timer, the whole run so far (DEM phases first)
   std::vector<Frame> frames;
   std::string placement_method;
 };
@@ -47,8 +47,8 @@ struct ParticleRows {
   const double* angular_velocity = nullptr;  // rad/s; nullptr when rotation is not simulated
   const std::int64_t* contact_count = nullptr;
   std::int64_t contact_rows = 0;
-  const std::int64_t* partner = nullptr;     // partner's global id
-  const double* spring = nullptr;            // tangential history spring (x 3), as seen from the particle
+  const std::int64_t* partner = nullptr;  // partner's global id
+  const double* spring = nullptr;         // tangential history spring (x 3), as seen from the particle
 };
 
 /// The fluid fields a bit-exact restart needs, by dataset name under /fluid, in this order. Each is

@@ -145,8 +145,8 @@ void declare_run_columns(Series& series, const RunSeriesLayout& layout) {
 
 void append_run_row(Series& series, const RunSeriesLayout& layout, const RunSeriesRow& r) {
   if (r.phase_seconds.size() != layout.phase_names.size())
-    throw std::invalid_argument("append_run_row: " + std::to_string(r.phase_seconds.size()) + " phase times for " +
-                                std::to_string(layout.phase_names.size()) + " phases");
+    throw std::invalid_argument("append_run_row: " + std::to_string(r.phase_seconds.size()) +
+                                " phase times for " + std::to_string(layout.phase_names.size()) + " phases");
   std::vector<double> row{r.time_s, static_cast<double>(r.step), r.solids_fraction};
   const auto vec = [&](const Vec3& v) { row.insert(row.end(), v.begin(), v.end()); };
   if (layout.fluid_scene) {

@@ -21,7 +21,7 @@ class Series {
   void add_column(const std::string& name, int width, const std::string& unit);
   /// One row: the concatenation of every column's values, in declaration order; column 0 is time.
   void append(const std::vector<double>& row);
-  void truncate_after(double time_s);       // drop rows with time > time_s (restart)
+  void truncate_after(double time_s);  // drop rows with time > time_s (restart)
   std::size_t rows() const { return rows_; }
   int row_width() const;
   const std::vector<double>& column(const std::string& name) const;  // rows x width, flattened
@@ -46,8 +46,9 @@ class Series {
 /// What a run's series holds, fixed for the whole run (and its restarts): which optional columns exist
 /// and the names of the per-phase timers (one column `time_<phase>_s` each).
 struct RunSeriesLayout {
-  bool fluid_scene = false;   // the scene has a [fluid] section: slip and fluid velocity (u = 0 when quiescent)
-  bool solves_fluid = false;  // a fluid is solved: the per-fluid-step columns (dt_fluid, ...)
+  // the scene has a [fluid] section: slip and fluid velocity (u = 0 when quiescent)
+  bool fluid_scene = false;
+  bool solves_fluid = false;             // a fluid is solved: the per-fluid-step columns (dt_fluid, ...)
   std::vector<std::string> phase_names;  // dataset-safe names ("force_integrate", "fluid_pressure", ...)
 };
 
@@ -62,14 +63,14 @@ struct RunSeriesRow {
   Vec3 particle_velocity_mean_m_s{};  // <phi v>/<phi>
   double kinetic_energy_J = 0;        // translational, particles
   double rotational_energy_J = 0;
-  double contact_energy_J = 0;        // elastic energy stored in the springs
+  double contact_energy_J = 0;  // elastic energy stored in the springs
   Vec3 momentum_kg_m_s{};
   double contacts_per_particle = 0;
-  double max_overlap_rel = 0;         // largest overlap / diameter
+  double max_overlap_rel = 0;  // largest overlap / diameter
   std::int64_t neighbor_rebuilds = 0;
-  double wall_seconds = 0;            // since the run (not the session) started
+  double wall_seconds = 0;  // since the run (not the session) started
   // solves_fluid only
-  double dt_fluid_s = 0;              // the fluid step that ended at this row
+  double dt_fluid_s = 0;  // the fluid step that ended at this row
   double fluid_kinetic_energy_J = 0;
   double continuity_residual_rel = 0;
   std::int64_t pressure_iterations = 0;

@@ -13,8 +13,8 @@ namespace cgd {
 PeriodicDriving periodic_driving(const Scene& scene) {
   const FluidConfig& f = *scene.fluid;
   const double volume = scene.domain.size_m[0] * scene.domain.size_m[1] * scene.domain.size_m[2];
-  const double phi = static_cast<double>(scene.derived.particle_count) * std::pow(scene.particles.parcel_size, 3) *
-                     scene.derived.particle_volume_m3 / volume;
+  const double phi = static_cast<double>(scene.derived.particle_count) *
+                     std::pow(scene.particles.parcel_size, 3) * scene.derived.particle_volume_m3 / volume;
   const double rho_p = scene.particles.density_kg_m3, rho_f = f.density_kg_m3;
   const double rho_mix = phi * rho_p + (1.0 - phi) * rho_f;
   // density whose weight the mean pressure gradient carries (see coupled_step.hpp)
@@ -80,15 +80,17 @@ void CoupledStep::begin(const dem::Particles& particles) {
 std::int64_t CoupledStep::substeps(std::int64_t step, std::int64_t steps_to_target) const {
   const double dt_fluid_max = max_fluid_dt();
   if (dt_fluid_max < dt_dem_s_)
-    throw RunError("at step " + std::to_string(step) + " (t = " + std::to_string(static_cast<double>(step) * dt_dem_s_) +
-                   " s) the fluid's Courant limit " + std::to_string(dt_fluid_max) + " s fell below one DEM step (" +
-                   std::to_string(dt_dem_s_) + " s): the flow is too fast for this grid");
+    throw RunError(
+        "at step " + std::to_string(step) + " (t = " + std::to_string(static_cast<double>(step) * dt_dem_s_) +
+        " s) the fluid's Courant limit " + std::to_string(dt_fluid_max) + " s fell below one DEM step (" +
+        std::to_string(dt_dem_s_) + " s): the flow is too fast for this grid");
   const std::int64_t n_max = static_cast<std::int64_t>(dt_fluid_max / dt_dem_s_);
   const std::int64_t fluid_steps_to_target = (steps_to_target + n_max - 1) / n_max;
   return (steps_to_target + fluid_steps_to_target - 1) / fluid_steps_to_target;
 }
 
-void CoupledStep::advance(dem::DemSystem& dem, std::int64_t n_sub, const std::function<void()>& after_dem_step) {
+void CoupledStep::advance(dem::DemSystem& dem, std::int64_t n_sub,
+                          const std::function<void()>& after_dem_step) {
   fluid_->step(static_cast<double>(n_sub) * dt_dem_s_);
   ++fluid_steps_;
   {
@@ -103,8 +105,9 @@ void CoupledStep::advance(dem::DemSystem& dem, std::int64_t n_sub, const std::fu
 
 std::array<std::vector<double>*, checkpoint::kFluidFieldNames.size()> CoupledStep::restart_fields() {
   fluid::FluidState& st = fluid_->state();
-  return {&st.velocity[0],      &st.velocity[1],          &st.velocity[2],          &st.pressure,
-          &st.void_fraction_old, &st.explicit_rate_old[0], &st.explicit_rate_old[1], &st.explicit_rate_old[2]};
+  return {
+      &st.velocity[0],       &st.velocity[1],          &st.velocity[2],          &st.pressure,
+      &st.void_fraction_old, &st.explicit_rate_old[0], &st.explicit_rate_old[1], &st.explicit_rate_old[2]};
 }
 
 checkpoint::FluidRows CoupledStep::checkpoint_rows() {
@@ -127,8 +130,8 @@ void CoupledStep::restore(const checkpoint::Reader& reader) {
                             fields[k]->data() + grid_.first_owned());
   st.dt_previous_s = reader.fluid_dt_previous_s();
   fluid_steps_ = reader.fluid_steps();
-  grid_.exchange_ghosts({st.velocity[0].data(), st.velocity[1].data(), st.velocity[2].data(), st.pressure.data(),
-                         st.void_fraction_old.data()});
+  grid_.exchange_ghosts({st.velocity[0].data(), st.velocity[1].data(), st.velocity[2].data(),
+                         st.pressure.data(), st.void_fraction_old.data()});
 }
 
 }  // namespace cgd

@@ -34,9 +34,9 @@ namespace cgd {
 /// Without the pressure-gradient force (two-way) the fluid's -eps grad p' (p' the periodic part) has no
 /// counterpart on the particles, so the mixture momentum is not conserved exactly (model A needs the force).
 struct PeriodicDriving {
-  Vec3 pressure_gradient_mean_Pa_m{};   // G, removed from the solved pressure
-  Vec3 fluid_body_force_N_m3{};         // rho_f g - G, per fluid volume (the fluid gets eps times it)
-  Vec3 particle_body_accel_m_s2{};      // g - V_p G / m with the pressure-gradient force on, else g
+  Vec3 pressure_gradient_mean_Pa_m{};  // G, removed from the solved pressure
+  Vec3 fluid_body_force_N_m3{};        // rho_f g - G, per fluid volume (the fluid gets eps times it)
+  Vec3 particle_body_accel_m_s2{};     // g - V_p G / m with the pressure-gradient force on, else g
 };
 PeriodicDriving periodic_driving(const Scene& scene);
 

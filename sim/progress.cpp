@@ -15,8 +15,10 @@ std::string format_duration(double s) {
   if (!std::isfinite(s) || s < 0) return "--:--";
   const long t = std::lround(s);
   char buf[32];
-  if (t >= 3600) std::snprintf(buf, sizeof buf, "%ld:%02ld:%02ld", t / 3600, (t / 60) % 60, t % 60);
-  else std::snprintf(buf, sizeof buf, "%02ld:%02ld", t / 60, t % 60);
+  if (t >= 3600)
+    std::snprintf(buf, sizeof buf, "%ld:%02ld:%02ld", t / 3600, (t / 60) % 60, t % 60);
+  else
+    std::snprintf(buf, sizeof buf, "%02ld:%02ld", t / 60, t % 60);
   return buf;
 }
 
@@ -74,14 +76,17 @@ std::string Progress::batch_row(std::int64_t step, const ProgressPhysics& p, dou
   const Rate r = rate(step, now);
   char buf[256];
   std::string out;
-  std::snprintf(buf, sizeof buf, " %10lld  %11.5e", static_cast<long long>(step), static_cast<double>(step) * s_.dt_s);
+  std::snprintf(buf, sizeof buf, " %10lld  %11.5e", static_cast<long long>(step),
+                static_cast<double>(step) * s_.dt_s);
   out += buf;
   if (s_.t_ref_s > 0) {
     std::snprintf(buf, sizeof buf, "  %9.4g", static_cast<double>(step) * s_.dt_s / s_.t_ref_s);
     out += buf;
   }
-  if (std::isfinite(r.steps_per_s)) std::snprintf(buf, sizeof buf, "  %8.4g  %8s", r.steps_per_s, format_duration(r.eta_s).c_str());
-  else std::snprintf(buf, sizeof buf, "  %8s  %8s", "-", "--:--");
+  if (std::isfinite(r.steps_per_s))
+    std::snprintf(buf, sizeof buf, "  %8.4g  %8s", r.steps_per_s, format_duration(r.eta_s).c_str());
+  else
+    std::snprintf(buf, sizeof buf, "  %8s  %8s", "-", "--:--");
   out += buf;
   if (s_.fluid_scene) {
     std::snprintf(buf, sizeof buf, "  %10.4g", p.slip_y_over_u_t);
@@ -109,8 +114,10 @@ std::string Progress::terminal_line(std::int64_t step, const ProgressPhysics& p,
     std::snprintf(buf, sizeof buf, " = %.3g t_ref", t / s_.t_ref_s);
     out += buf;
   }
-  if (std::isfinite(r.steps_per_s)) std::snprintf(buf, sizeof buf, "  %.3g steps/s  ETA %s", r.steps_per_s, format_duration(r.eta_s).c_str());
-  else std::snprintf(buf, sizeof buf, "  - steps/s  ETA --:--");
+  if (std::isfinite(r.steps_per_s))
+    std::snprintf(buf, sizeof buf, "  %.3g steps/s  ETA %s", r.steps_per_s, format_duration(r.eta_s).c_str());
+  else
+    std::snprintf(buf, sizeof buf, "  - steps/s  ETA --:--");
   out += buf;
   if (s_.fluid_scene) {
     std::snprintf(buf, sizeof buf, "  slip_y/u_t %.3g", p.slip_y_over_u_t);

@@ -13,11 +13,11 @@ namespace cgd {
 /// The physics a progress line shows, from the latest series row (already reduced over the ranks).
 /// Fields the run does not have (Progress::Settings says which) are not shown.
 struct ProgressPhysics {
-  double slip_y_over_u_t = 0;     // <u_slip,y>/u_t (scenes with a fluid)
-  double kinetic_energy_J = 0;    // translational kinetic energy of the particles
-  double max_overlap_rel = 0;     // largest overlap / diameter
-  double max_solids_fraction = 0; // largest cell phi (fluid solved)
-  double dt_fluid_s = 0;          // the last fluid step (fluid solved)
+  double slip_y_over_u_t = 0;      // <u_slip,y>/u_t (scenes with a fluid)
+  double kinetic_energy_J = 0;     // translational kinetic energy of the particles
+  double max_overlap_rel = 0;      // largest overlap / diameter
+  double max_solids_fraction = 0;  // largest cell phi (fluid solved)
+  double dt_fluid_s = 0;           // the last fluid step (fluid solved)
 };
 
 class Progress {
@@ -25,14 +25,14 @@ class Progress {
   enum class Mode { Off, Terminal, Batch };
 
   struct Settings {
-    std::string tool;               // "cgd-generate", prefix of the terminal line and the header
+    std::string tool;  // "cgd-generate", prefix of the terminal line and the header
     Mode mode = Mode::Off;
-    double interval_s = 60;         // wall seconds between batch lines
+    double interval_s = 60;  // wall seconds between batch lines
     std::int64_t end_step = 0;
-    double dt_s = 0;                // DEM step: time = step dt
-    double t_ref_s = 0;             // u_t/g; 0: no t_ref column
-    bool fluid_scene = false;       // slip column
-    bool solves_fluid = false;      // max phi and fluid-step columns
+    double dt_s = 0;            // DEM step: time = step dt
+    double t_ref_s = 0;         // u_t/g; 0: no t_ref column
+    bool fluid_scene = false;   // slip column
+    bool solves_fluid = false;  // max phi and fluid-step columns
   };
 
   /// Terminal when stderr is a terminal, Batch otherwise, Off with --quiet.
