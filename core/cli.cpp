@@ -5,6 +5,7 @@
 #include <unistd.h>
 
 #include <CLI/CLI.hpp>
+#include <cmath>
 #include <filesystem>
 #include <iostream>
 #include <sstream>
@@ -61,10 +62,15 @@ RunOptions parse_run_command_line(int argc, char** argv, const std::string& tool
   app.add_option("--progress-interval", options.progress_interval_s,
                  "Wall seconds between progress lines when stderr is not a terminal (a batch log; default 60); "
                  "on a terminal one line is updated about once a second")
-      ->type_name("SECONDS")
-      ->check(CLI::PositiveNumber);
+      ->type_name("SECONDS");
   if (add_options) add_options(app);
   parse_command_line(app, argc, argv, tool_name);
+  if (!(options.progress_interval_s > 0) || !std::isfinite(options.progress_interval_s)) {
+    std::ostringstream text;
+    text << "--progress-interval: " << options.progress_interval_s
+         << " is not allowed (wall seconds between progress lines, > 0)\nRun with --help for more information.\n";
+    throw CommandLineExit(kExitBadInput, "", text.str());
+  }
   if (options.scene_path.empty()) {
     if (!options.restart || options.output_dir.empty())
       throw CommandLineExit(kExitBadInput, "",

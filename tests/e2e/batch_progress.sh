@@ -3,7 +3,8 @@
 # header naming the columns and then a progress line every --progress-interval seconds of wall time, the
 # last one at the final step; each line has a value under every header column (step, time in s and t_ref,
 # steps/s, ETA, slip/u_t, kinetic energy, overlap, max phi, fluid step). --quiet prints neither the
-# progress nor the banner: stderr stays empty and stdout holds the final summary only.
+# progress nor the banner: stderr stays empty and stdout holds the final summary only. An interval that
+# is not > 0 is bad input (exit 2).
 # Environment (set by CTest): CGD_SOURCE_DIR, CGD_BINARY_DIR.
 set -u
 source_dir=${CGD_SOURCE_DIR:-$(cd "$(dirname "$0")/../.." && pwd)}
@@ -53,6 +54,15 @@ elif ! grep -q "^timing" "$tmp/quiet.out"; then
   fail "--quiet: no final summary on stdout"
 else
   echo "ok   --quiet: no progress, no banner; the final summary only ($(wc -l <"$tmp/quiet.out") lines)"
+fi
+
+# a progress interval that is not a positive number of seconds is bad input: exit 2, nothing written
+"$bin" "$scene" "${args[@]}" --progress-interval 0 -o "$tmp/zero" >/dev/null 2>"$tmp/zero.err"
+status=$?
+if [ "$status" -eq 2 ] && grep -q -- "--progress-interval: 0 is not allowed" "$tmp/zero.err" && [ ! -e "$tmp/zero" ]; then
+  echo "ok   --progress-interval 0: exit 2, $(head -n 1 "$tmp/zero.err")"
+else
+  fail "--progress-interval 0: exit $status, stderr: $(cat "$tmp/zero.err")"
 fi
 
 [ "$failures" -eq 0 ] || { echo "$failures failure(s)"; exit 1; }
