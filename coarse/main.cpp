@@ -45,6 +45,7 @@ int main(int argc, char** argv) {
         options.output_dir.empty() ? cgd::default_run_directory("coarse", options.scene_path) : options.output_dir;
     settings.restart = options.restart;
     settings.quiet = options.quiet;
+    settings.progress_interval_s = options.progress_interval_s;
     settings.tool = "cgd-coarse";
     cgd::run_scene(scene, settings, MPI_COMM_WORLD);
 

@@ -5,6 +5,7 @@
 #include <unistd.h>
 
 #include <CLI/CLI.hpp>
+#include <cmath>
 #include <filesystem>
 #include <iostream>
 #include <sstream>
@@ -57,9 +58,19 @@ RunOptions parse_run_command_line(int argc, char** argv, const std::string& tool
   app.add_option("-o,--output", options.output_dir, "Run directory (default: out/<stage>/<scene name>)")
       ->type_name("DIR");
   app.add_flag("--restart", options.restart, "Continue from the checkpoint in the run directory");
-  app.add_flag("--quiet", options.quiet, "No progress output");
+  app.add_flag("--quiet", options.quiet, "Errors, warnings and the final summary only: no banner, no progress");
+  app.add_option("--progress-interval", options.progress_interval_s,
+                 "Wall seconds between progress lines when stderr is not a terminal (a batch log; default 60); "
+                 "on a terminal one line is updated about once a second")
+      ->type_name("SECONDS");
   if (add_options) add_options(app);
   parse_command_line(app, argc, argv, tool_name);
+  if (!(options.progress_interval_s > 0) || !std::isfinite(options.progress_interval_s)) {
+    std::ostringstream text;
+    text << "--progress-interval: " << options.progress_interval_s
+         << " is not allowed (wall seconds between progress lines, > 0)\nRun with --help for more information.\n";
+    throw CommandLineExit(kExitBadInput, "", text.str());
+  }
   if (options.scene_path.empty()) {
     if (!options.restart || options.output_dir.empty())
       throw CommandLineExit(kExitBadInput, "",
@@ -135,6 +146,8 @@ int run_tool(const std::function<int()>& body) {
     return e.status();
   } catch (const InputError& e) {
     return report(std::string("error: ") + e.what() + "\n", kExitBadInput);
+  } catch (const Interrupted& e) {
+    return report(std::string("run interrupted: ") + e.what() + "\n", e.exit_status());
   } catch (const RunError& e) {
     return report(std::string("run failed: ") + e.what() + "\n", kExitRunFailed);
   } catch (const std::exception& e) {

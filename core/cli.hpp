@@ -17,7 +17,8 @@
 //   }
 //
 // run_tool turns the error kinds into the exit statuses of design.md: InputError -> 2 ("error: ..."),
-// RunError -> 1 ("run failed: ..."), a bad option -> 2 (CLI11's message), --help/--version -> 0.
+// RunError -> 1 ("run failed: ..."), Interrupted -> 128 + signal ("run interrupted: ...": 130 for SIGINT,
+// 143 for SIGTERM), a bad option -> 2 (CLI11's message), --help/--version -> 0.
 // Under MPI only rank 0 prints.
 #include <functional>
 #include <stdexcept>
@@ -36,7 +37,8 @@ struct RunOptions {
   std::vector<std::string> overrides;  // --set SECTION.KEY=VALUE, in the order given
   std::string output_dir;              // -o/--output; empty: the caller defaults it (default_run_directory)
   bool restart = false;                // --restart: continue from the run directory's checkpoint
-  bool quiet = false;                  // --quiet: no progress output
+  bool quiet = false;                  // --quiet: errors, warnings and the final summary only
+  double progress_interval_s = 60;     // --progress-interval: wall seconds between batch progress lines
 };
 
 /// Thrown by the parsers below when the command line ends the program before any work: --help and
@@ -56,7 +58,7 @@ class CommandLineExit : public std::exception {
   std::string out_text_, err_text_;
 };
 
-/// Parses `TOOL SCENE.toml [--set KEY=VALUE]... [-o DIR] [--restart] [--quiet]` (plus --help,
+/// Parses `TOOL SCENE.toml [--set KEY=VALUE]... [-o DIR] [--restart] [--quiet] [--progress-interval S]` (plus --help,
 /// --version). `add_options`, if given, adds tool-specific options (e.g. cgd-coarse's --model)
 /// to the CLI11 app before parsing; the variables they bind must outlive the call.
 RunOptions parse_run_command_line(int argc, char** argv, const std::string& tool_name,

@@ -8,6 +8,7 @@
 
 #include "core/h5.hpp"
 #include "core/scene.hpp"
+#include "core/series.hpp"  // schema::Series, the run's series.h5
 
 namespace cgd::schema {
 
@@ -51,36 +52,6 @@ struct FluidFields {
 /// Write a snapshot file atomically (attributes time, step; /params; /particles; /fluid if given).
 void write_snapshot(const std::string& path, MPI_Comm comm, const Scene& scene, double time_s, std::int64_t step,
                     const ParticleFields& particles, const FluidFields* fluid = nullptr);
-
-/// Time series kept on every rank (identical rows, values already reduced), written whole and
-/// atomically; read back on restart and truncated to the checkpoint time.
-class Series {
- public:
-  /// Declare a column before the first row: `width` values per row (e.g. 3 for a vector), `unit` as text.
-  void add_column(const std::string& name, int width, const std::string& unit);
-  /// One row: the concatenation of every column's values, in declaration order; column 0 is time.
-  void append(const std::vector<double>& row);
-  void truncate_after(double time_s);       // drop rows with time > time_s (restart)
-  std::size_t rows() const { return rows_; }
-  int row_width() const;
-  const std::vector<double>& column(const std::string& name) const;  // rows x width, flattened
-  void write(const std::string& path, MPI_Comm comm, const Scene& scene) const;
-  /// Read a series file written by `write` (any rank; InputError if unreadable).
-  static Series read(const std::string& path, MPI_Comm comm);
-  /// Warnings of the run (each once), written as the root attribute `warnings` (string list).
-  void add_warning(const std::string& text) { warnings_.push_back(text); }
-  const std::vector<std::string>& warnings() const { return warnings_; }
-
- private:
-  std::vector<std::string> warnings_;
-  struct Column {
-    std::string name, unit;
-    int width = 1;
-    std::vector<double> values;
-  };
-  std::vector<Column> columns_;
-  std::size_t rows_ = 0;
-};
 
 /// One entry of run.xmf's temporal collection.
 struct XdmfFrame {

@@ -24,6 +24,7 @@ int main(int argc, char** argv) {
         options.output_dir.empty() ? cgd::default_run_directory("generate", options.scene_path) : options.output_dir;
     settings.restart = options.restart;
     settings.quiet = options.quiet;
+    settings.progress_interval_s = options.progress_interval_s;
     cgd::run_scene(scene, settings, MPI_COMM_WORLD);
     return cgd::kExitOk;
   });

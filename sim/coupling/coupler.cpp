@@ -102,7 +102,7 @@ void Coupler::compute_drag(const dem::Particles& p, fluid::FluidState& state) {
     if (eps < s_.void_fraction_floor) eps = s_.void_fraction_floor;
     else eps -= take_back * (eps - s_.void_fraction_floor);
     // one-way: the particles do not act on the fluid at all, neither by drag (B = 0) nor by the volume
-    // they take (the fluid is solved with eps = 1; sim/run.hpp periodic_driving); eps serves the drag law
+    // they take (the fluid is solved with eps = 1; sim/coupled_step.hpp periodic_driving); eps serves the drag law
     state.void_fraction[c] = s_.two_way ? eps : 1.0;
     phi_[c] = 1.0 - eps;  // the solids fraction the fluid sees: used at the particles too
   }

@@ -20,7 +20,7 @@
 // particle -V_p rho_mix g besides m g, so the net force on the box is zero.
 // One-way coupling: steps 1-2 still give eps and the particle drag, but the fluid is solved as a pure
 // fluid (B = 0 and eps = 1 in its equations: a fluid that gets out of the particles' way without being
-// pushed develops a growing displacement flow), with hydrostatic driving (G = rho_f g; sim/run.hpp
+// pushed develops a growing displacement flow), with hydrostatic driving (G = rho_f g; sim/coupled_step.hpp
 // periodic_driving, which also states the driving without the pressure-gradient force).
 #include <array>
 #include <vector>
@@ -45,7 +45,7 @@ struct CouplerSettings {
   bool two_way = true;                 // false: no momentum returned to the fluid (B = 0)
   bool pressure_gradient_force = true;
   double void_fraction_floor = 0.3;    // eps_min
-  std::array<double, 3> particle_body_accel{};  // g less the mean pressure gradient's V_p G/m (run.hpp periodic_driving)
+  std::array<double, 3> particle_body_accel{};  // g less the mean pressure gradient's V_p G/m (coupled_step.hpp periodic_driving)
 };
 
 /// Per-particle coupling quantities of the last `compute_drag` (owned particles, current order).

@@ -1,5 +1,6 @@
 // The file schema (design.md "Files (HDF5 schema, version 1)") in one process: a snapshot read back
-// field by field, the series round trip and truncation, and run.xmf.
+// field by field, the series round trip and truncation, a run's series columns, the checkpoint round
+// trip, and run.xmf.
 //
 // Set CGD_KEEP_TEST_FILES=1 to keep the files (the folder is printed) for a look with h5dump,
 // h5py, tools/inspect_snapshot.py or ParaView.
@@ -15,10 +16,12 @@
 #include <string>
 #include <vector>
 
+#include "core/checkpoint.hpp"
 #include "core/error.hpp"
 #include "core/h5.hpp"
 #include "core/output.hpp"
 #include "core/scene.hpp"
+#include "core/series.hpp"
 
 namespace fs = std::filesystem;
 using cgd::h5::File;
@@ -363,4 +366,104 @@ with h5py.File(sys.argv[2], 'r') as f:
 )";
   const std::string cmd = "/usr/bin/python3 '" + script + "' '" + file + "' '" + path("series.h5") + "'";
   EXPECT_EQ(std::system(cmd.c_str()), 0) << cmd;
+}
+
+// core/series.hpp: a run's columns are named, in the documented order, with the optional ones only
+// where the layout calls for them, and a row lands under its names.
+TEST_F(OutputTest, RunSeriesColumnsFollowTheLayoutAndRowsLandUnderTheirNames) {
+  cgd::schema::RunSeriesLayout dry{false, false, {"neighbor", "output"}};
+  cgd::schema::Series s;
+  cgd::schema::declare_run_columns(s, dry);
+  cgd::schema::RunSeriesRow r;
+  r.time_s = 1.5;
+  r.step = 7;
+  r.particle_velocity_mean_m_s = {0.0, -0.25, 0.0};
+  r.max_overlap_rel = 0.01;
+  r.phase_seconds = {2.0, 3.0};
+  cgd::schema::append_run_row(s, dry, r);
+  EXPECT_EQ(s.column("step")[0], 7.0);
+  EXPECT_EQ(s.column("particle_velocity_mean")[1], -0.25);
+  EXPECT_EQ(s.column("max_overlap_rel")[0], 0.01);
+  EXPECT_EQ(s.column("time_output_s")[0], 3.0);
+  EXPECT_THROW(s.column("slip_velocity"), cgd::InputError);  // no fluid: no slip column
+  EXPECT_THROW(s.column("dt_fluid"), cgd::InputError);
+  r.phase_seconds = {2.0};  // a row that does not match the layout is refused
+  EXPECT_THROW(cgd::schema::append_run_row(s, dry, r), std::invalid_argument);
+
+  cgd::schema::RunSeriesLayout coupled{true, true, {"coupling"}};
+  cgd::schema::Series c;
+  cgd::schema::declare_run_columns(c, coupled);
+  r.slip_velocity_m_s = {0.0, 0.2, 0.0};
+  r.dt_fluid_s = 6e-5;
+  r.floored_cells = 4;
+  r.phase_seconds = {1.0};
+  cgd::schema::append_run_row(c, coupled, r);
+  EXPECT_EQ(c.column("slip_velocity")[1], 0.2);
+  EXPECT_EQ(c.column("dt_fluid")[0], 6e-5);
+  EXPECT_EQ(c.column("floored_cells")[0], 4.0);
+}
+
+// core/checkpoint.hpp: what is written is read back exactly -- the run state, the particles with their
+// contact records, and the fluid fields by name -- at one rank.
+TEST_F(OutputTest, CheckpointRoundTripKeepsRunStateParticlesContactsAndFluid) {
+  const cgd::Scene scene = test_scene();
+  cgd::checkpoint::RunState state;
+  state.step = 1234;
+  state.time_s = 1234 * 7.18e-7;
+  state.displacement_bound_m = 1.25e-5;
+  state.rebuild_due = true;
+  state.last_sort_step = 1000;
+  state.neighbor_rebuilds = 17;
+  state.wall_seconds = 42.5;
+  state.phase_seconds = {1.0, 2.0, 3.5};
+  state.frames = {{0, 0.0, 3}, {1000, 1000 * 7.18e-7, 3}};
+  state.placement_method = "random sequential addition";
+  const std::vector<std::int64_t> id{5, 3, 9}, contact_count{1, 0, 2}, partner{3, 5, 5};
+  const std::vector<double> x{0.1, 0.2, 0.3, 1.1, 1.2, 1.3, 2.1, 2.2, 2.3}, v{-1, -2, -3, 4, 5, 6, 7, 8, 9},
+      w{0.5, 0.25, 0.125, 1, 2, 3, 4, 5, 6}, spring{1e-6, 2e-6, 3e-6, 4e-6, 5e-6, 6e-6, 7e-6, 8e-6, 9e-6};
+  cgd::checkpoint::ParticleRows rows{3, id.data(), x.data(), v.data(), w.data(), contact_count.data(), 3,
+                                     partner.data(), spring.data()};
+  std::vector<std::vector<double>> fields;
+  cgd::checkpoint::FluidRows fluid;
+  fluid.dt_previous_s = 6.5e-5;
+  fluid.steps = 99;
+  fluid.cells = 4;
+  for (std::size_t k = 0; k < cgd::checkpoint::kFluidFieldNames.size(); ++k)
+    fields.push_back({k + 0.5, k + 1.5, k + 2.5, k + 3.5});
+  for (std::size_t k = 0; k < fields.size(); ++k) fluid.fields[k] = fields[k].data();
+  const std::string path = (dir_ / "checkpoint.h5").string();
+  cgd::checkpoint::write(path, MPI_COMM_WORLD, scene, state, rows, &fluid);
+
+  cgd::checkpoint::Reader reader(path, MPI_COMM_WORLD);
+  const cgd::checkpoint::RunState& back = reader.state();
+  EXPECT_EQ(back.step, 1234);
+  EXPECT_EQ(back.time_s, state.time_s);
+  EXPECT_EQ(back.displacement_bound_m, 1.25e-5);
+  EXPECT_TRUE(back.rebuild_due);
+  EXPECT_EQ(back.last_sort_step, 1000);
+  EXPECT_EQ(back.neighbor_rebuilds, 17);
+  EXPECT_EQ(back.wall_seconds, 42.5);
+  EXPECT_EQ(back.phase_seconds, state.phase_seconds);
+  ASSERT_EQ(back.frames.size(), 2u);
+  EXPECT_EQ(back.frames[1].step, 1000);
+  EXPECT_EQ(back.frames[1].time_s, state.frames[1].time_s);
+  EXPECT_EQ(back.placement_method, state.placement_method);
+  EXPECT_EQ(reader.ranks(), 1);
+  EXPECT_EQ(reader.rank_particle_counts(), std::vector<std::int64_t>{3});
+  EXPECT_EQ(reader.rank_contact_counts(), std::vector<std::int64_t>{3});
+  EXPECT_TRUE(reader.has_angular_velocity());
+  const cgd::checkpoint::ParticleData p = reader.particles(0, 3, 0, 3, true);
+  EXPECT_EQ(p.id, id);
+  EXPECT_EQ(p.position, x);
+  EXPECT_EQ(p.velocity, v);
+  EXPECT_EQ(p.angular_velocity, w);
+  EXPECT_EQ(p.contact_count, contact_count);
+  EXPECT_EQ(p.partner, partner);
+  EXPECT_EQ(p.spring, spring);
+  ASSERT_TRUE(reader.has_fluid());
+  EXPECT_EQ(reader.fluid_dt_previous_s(), 6.5e-5);
+  EXPECT_EQ(reader.fluid_steps(), 99);
+  std::vector<double> pressure(2);
+  reader.read_fluid_field(3, 1, 2, pressure.data());  // "pressure", cells 1 and 2
+  EXPECT_EQ(pressure, (std::vector<double>{4.5, 5.5}));
 }

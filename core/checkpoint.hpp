@@ -1,0 +1,112 @@
+#pragma once
+// checkpoint.h5 of a run directory (docs/schema-run.md, "Checkpoint"): everything a restart needs to
+// continue a run bit for bit -- the DEM state (unwrapped positions, leapfrog velocities, the contact
+// histories keyed by partner id), the neighbour-list bookkeeping, the fluid state and the run's own
+// bookkeeping (wall time, phase timers, snapshot frames). The one place that knows its layout; the
+// engine (sim/run.cpp) fills and consumes the plain structs below.
+#include <mpi.h>
+
+#include <array>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "core/h5.hpp"
+#include "core/scene.hpp"
+
+namespace cgd::checkpoint {
+
+/// A snapshot written so far (run.xmf is rebuilt from these after a restart).
+struct Frame {
+  std::int64_t step = 0;
+  double time_s = 0;
+  std::int64_t particle_count = 0;
+};
+
+/// The run's bookkeeping at the checkpoint step (root attributes).
+struct RunState {
+  std::int64_t step = 0;
+  double time_s = 0;
+  double displacement_bound_m = 0;  // bound on any particle's displacement since the last list build
+  bool rebuild_due = false;         // the neighbour list must be rebuilt before the next step
+  std::int64_t last_sort_step = 0;  // step of the last reordering by cell
+  std::int64_t neighbor_rebuilds = 0;
+  double wall_seconds = 0;            // wall time of the whole run so far (all sessions)
+  std::vector<double> phase_seconds;  // per phase timer, the whole run so far (DEM phases first)
+  std::vector<Frame> frames;
+  std::string placement_method;
+};
+
+/// This rank's owned particles and their contact records, as views (interleaved xyz vectors). The
+/// contact records of particle i are rows [sum of contact_count[<i]], ...) of partner/spring.
+struct ParticleRows {
+  std::int64_t count = 0;
+  const std::int64_t* id = nullptr;
+  const double* position = nullptr;          // unwrapped, m
+  const double* velocity = nullptr;          // leapfrog v_{n-1/2}, m/s
+  const double* angular_velocity = nullptr;  // rad/s; nullptr when rotation is not simulated
+  const std::int64_t* contact_count = nullptr;
+  std::int64_t contact_rows = 0;
+  const std::int64_t* partner = nullptr;  // partner's global id
+  const double* spring = nullptr;         // tangential history spring (x 3), as seen from the particle
+};
+
+/// The fluid fields a bit-exact restart needs, by dataset name under /fluid, in this order. Each is
+/// written as the rank's owned planes in grid order (y, z, x), concatenated over the ranks in y order:
+/// the global (y, z, x) order, so any rank count reads it back.
+inline constexpr std::array<const char*, 8> kFluidFieldNames = {
+    "velocity_x",        "velocity_y",      "velocity_z",      "pressure",
+    "void_fraction_old", "explicit_rate_x", "explicit_rate_y", "explicit_rate_z"};
+
+/// This rank's fluid slab: `fields[k]` points at `cells` values of kFluidFieldNames[k].
+struct FluidRows {
+  double dt_previous_s = 0;  // the last fluid step (AB2 needs it)
+  std::int64_t steps = 0;    // fluid steps done
+  std::int64_t cells = 0;    // owned cells of this rank
+  std::array<const double*, kFluidFieldNames.size()> fields{};
+};
+
+/// Writes `path` atomically (h5::write_atomically): the common root attributes and /params of `scene`,
+/// `state`, every rank's particles (with the per-rank counts that let the same rank count read its own
+/// rows back) and, when given, the fluid. Collective.
+void write(const std::string& path, MPI_Comm comm, const Scene& scene, const RunState& state,
+           const ParticleRows& particles, const FluidRows* fluid);
+
+/// Particle rows read back (owning vectors, same meaning as ParticleRows).
+struct ParticleData {
+  std::vector<std::int64_t> id;
+  std::vector<double> position, velocity, angular_velocity;  // angular_velocity empty without rotation
+  std::vector<std::int64_t> contact_count;
+  std::vector<std::int64_t> partner;
+  std::vector<double> spring;
+};
+
+/// An open checkpoint, for reading (any rank count).
+class Reader {
+ public:
+  /// Opens `path` and reads the run state. Collective.
+  Reader(const std::string& path, MPI_Comm comm);
+  const RunState& state() const { return state_; }
+  /// Rank count of the run that wrote it, and its per-rank particle and contact-record counts.
+  std::int64_t ranks() const { return ranks_; }
+  const std::vector<std::int64_t>& rank_particle_counts() const { return particle_counts_; }
+  const std::vector<std::int64_t>& rank_contact_counts() const { return contact_counts_; }
+  bool has_angular_velocity() const;
+  /// Particles [first, first + count) and contact records [contact_first, contact_first + contact_count).
+  ParticleData particles(std::int64_t first, std::int64_t count, std::int64_t contact_first,
+                         std::int64_t contact_count, bool rotation) const;
+  bool has_fluid() const;
+  double fluid_dt_previous_s() const;
+  std::int64_t fluid_steps() const;
+  /// Cells [first, first + count) of kFluidFieldNames[field] in the global (y, z, x) order, into `out`.
+  void read_fluid_field(std::size_t field, std::int64_t first, std::int64_t count, double* out) const;
+  void close();
+
+ private:
+  h5::File file_;
+  RunState state_;
+  std::int64_t ranks_ = 1;
+  std::vector<std::int64_t> particle_counts_, contact_counts_;
+};
+
+}  // namespace cgd::checkpoint

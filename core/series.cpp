@@ -1,0 +1,177 @@
+// series.h5 (docs/schema-run.md): the time-series table and a run's columns.
+#include "core/series.hpp"
+
+#include <stdexcept>
+
+#include "core/error.hpp"
+#include "core/output.hpp"
+
+namespace cgd::schema {
+
+// ---- Series ----------------------------------------------------------------------------------------------
+
+void Series::add_column(const std::string& name, int width, const std::string& unit) {
+  if (rows_ > 0) throw std::logic_error("Series::add_column('" + name + "') after rows were appended");
+  if (name.empty() || name.find('/') != std::string::npos || width < 1)
+    throw std::invalid_argument("Series::add_column: bad column '" + name + "' of width " +
+                                std::to_string(width));
+  for (const Column& c : columns_)
+    if (c.name == name)
+      throw std::invalid_argument("Series::add_column: column '" + name + "' declared twice");
+  columns_.push_back(Column{name, unit, width, {}});
+}
+
+int Series::row_width() const {
+  int width = 0;
+  for (const Column& c : columns_) width += c.width;
+  return width;
+}
+
+void Series::append(const std::vector<double>& row) {
+  if (columns_.empty()) throw std::logic_error("Series::append before any column was declared");
+  if (static_cast<int>(row.size()) != row_width())
+    throw std::invalid_argument("Series::append: row of " + std::to_string(row.size()) +
+                                " values, expected " + std::to_string(row_width()));
+  auto it = row.begin();
+  for (Column& c : columns_) {
+    c.values.insert(c.values.end(), it, it + c.width);
+    it += c.width;
+  }
+  ++rows_;
+}
+
+void Series::truncate_after(double time_s) {
+  if (columns_.empty() || rows_ == 0) return;
+  const std::vector<double>& time = columns_.front().values;  // column 0 is time (width 1)
+  const int time_width = columns_.front().width;
+  std::vector<bool> keep(rows_);
+  std::size_t kept = 0;
+  for (std::size_t r = 0; r < rows_; ++r) kept += (keep[r] = time[r * time_width] <= time_s);
+  for (Column& c : columns_) {
+    std::vector<double> values;
+    values.reserve(kept * c.width);
+    for (std::size_t r = 0; r < rows_; ++r)
+      if (keep[r])
+        values.insert(values.end(), c.values.begin() + r * c.width, c.values.begin() + (r + 1) * c.width);
+    c.values = std::move(values);
+  }
+  rows_ = kept;
+}
+
+const std::vector<double>& Series::column(const std::string& name) const {
+  std::string names;
+  for (const Column& c : columns_) {
+    if (c.name == name) return c.values;
+    names += (names.empty() ? "" : ", ") + c.name;
+  }
+  throw InputError("series: no column '" + name + "' (columns: " + names + ")");
+}
+
+void Series::write(const std::string& path, MPI_Comm comm, const Scene& scene) const {
+  h5::write_atomically(path, comm, [&](h5::File& f) {
+    write_common(f, "series", scene);
+    std::vector<std::string> names;
+    for (const Column& c : columns_) names.push_back(c.name);
+    f.set_attr("/", "columns", names);
+    f.set_attr("/", "rows", static_cast<std::int64_t>(rows_));
+    if (!warnings_.empty()) f.set_attr("/", "warnings", warnings_);
+    for (const Column& c : columns_) {
+      const std::string dataset = "/" + c.name;
+      std::vector<std::uint64_t> dims{rows_};
+      if (c.width > 1) dims.push_back(static_cast<std::uint64_t>(c.width));
+      f.write_replicated(dataset, c.values, dims);
+      f.set_attr(dataset, "unit", c.unit);
+    }
+  });
+}
+
+Series Series::read(const std::string& path, MPI_Comm comm) {
+  h5::File f = h5::File::open_read(path, comm);
+  const std::string format = f.has_attr("/", "cgd_format") ? f.attr_string("/", "cgd_format") : "";
+  if (format != "series")
+    throw InputError(path + ": not a cgd series file (cgd_format = '" + format + "', expected 'series')");
+  Series s;
+  if (f.has_attr("/", "warnings")) s.warnings_ = f.attr_strings("/", "warnings");
+  for (const std::string& name : f.attr_strings("/", "columns")) {
+    const std::string dataset = "/" + name;
+    const std::vector<std::uint64_t> dims = f.dims(dataset);
+    if (dims.empty() || dims.size() > 2)
+      throw InputError(path + ": series column '" + name + "' is not a 1-D or 2-D array");
+    Column c;
+    c.name = name;
+    c.width = dims.size() == 2 ? static_cast<int>(dims[1]) : 1;
+    c.unit = f.has_attr(dataset, "unit") ? f.attr_string(dataset, "unit") : "";
+    c.values = f.read_double(dataset);
+    if (s.columns_.empty())
+      s.rows_ = dims[0];
+    else if (dims[0] != s.rows_)
+      throw InputError(path + ": series column '" + name + "' has " + std::to_string(dims[0]) + " rows, '" +
+                       s.columns_.front().name + "' has " + std::to_string(s.rows_));
+    s.columns_.push_back(std::move(c));
+  }
+  f.close();
+  return s;
+}
+
+// ---- a run's columns -------------------------------------------------------------------------------
+
+void declare_run_columns(Series& series, const RunSeriesLayout& layout) {
+  series.add_column("time", 1, "s");
+  series.add_column("step", 1, "1");
+  series.add_column("solids_fraction", 1, "1");
+  if (layout.fluid_scene) {
+    series.add_column("slip_velocity", 3, "m/s");
+    series.add_column("fluid_velocity_mean", 3, "m/s");
+  }
+  series.add_column("particle_velocity_mean", 3, "m/s");
+  series.add_column("kinetic_energy", 1, "J");
+  series.add_column("rotational_energy", 1, "J");
+  series.add_column("contact_energy", 1, "J");
+  series.add_column("momentum", 3, "kg m/s");
+  series.add_column("contacts_per_particle", 1, "1");
+  series.add_column("max_overlap_rel", 1, "1");
+  series.add_column("neighbor_rebuilds", 1, "1");
+  series.add_column("wall_seconds", 1, "s");
+  if (layout.solves_fluid) {
+    series.add_column("dt_fluid", 1, "s");
+    series.add_column("fluid_kinetic_energy", 1, "J");
+    series.add_column("continuity_residual_rel", 1, "1");
+    series.add_column("pressure_iterations", 1, "1");
+    series.add_column("max_solids_fraction", 1, "1");
+    series.add_column("floored_cells", 1, "1");
+  }
+  for (const std::string& name : layout.phase_names) series.add_column("time_" + name + "_s", 1, "s");
+}
+
+void append_run_row(Series& series, const RunSeriesLayout& layout, const RunSeriesRow& r) {
+  if (r.phase_seconds.size() != layout.phase_names.size())
+    throw std::invalid_argument("append_run_row: " + std::to_string(r.phase_seconds.size()) +
+                                " phase times for " + std::to_string(layout.phase_names.size()) + " phases");
+  std::vector<double> row{r.time_s, static_cast<double>(r.step), r.solids_fraction};
+  const auto vec = [&](const Vec3& v) { row.insert(row.end(), v.begin(), v.end()); };
+  if (layout.fluid_scene) {
+    vec(r.slip_velocity_m_s);
+    vec(r.fluid_velocity_mean_m_s);
+  }
+  vec(r.particle_velocity_mean_m_s);
+  row.push_back(r.kinetic_energy_J);
+  row.push_back(r.rotational_energy_J);
+  row.push_back(r.contact_energy_J);
+  vec(r.momentum_kg_m_s);
+  row.push_back(r.contacts_per_particle);
+  row.push_back(r.max_overlap_rel);
+  row.push_back(static_cast<double>(r.neighbor_rebuilds));
+  row.push_back(r.wall_seconds);
+  if (layout.solves_fluid) {
+    row.push_back(r.dt_fluid_s);
+    row.push_back(r.fluid_kinetic_energy_J);
+    row.push_back(r.continuity_residual_rel);
+    row.push_back(static_cast<double>(r.pressure_iterations));
+    row.push_back(r.max_solids_fraction);
+    row.push_back(static_cast<double>(r.floored_cells));
+  }
+  row.insert(row.end(), r.phase_seconds.begin(), r.phase_seconds.end());
+  series.append(row);
+}
+
+}  // namespace cgd::schema
