@@ -1258,7 +1258,7 @@ std::string describe_scene(const Scene& s) {
   }
   row("dt_DEM", with_unit(x.dt_dem_s, "s") + " (" + num(s.run.end_time_s / x.dt_dem_s) + " steps)");
   if (s.solves_fluid()) {
-    row("dt_fluid", with_unit(x.dt_fluid_s, "s"));
+    row("dt_fluid (initial)", with_unit(x.dt_fluid_s, "s") + " (Courant step at u_t; adapts, see \"fluid step\")");
     row("cells", std::to_string(x.cells[0]) + " x " + std::to_string(x.cells[1]) + " x " +
                      std::to_string(x.cells[2]) + " (cell " + num(s.domain.size_m[0] / x.cells[0] / d) +
                      " d_p along x)");
