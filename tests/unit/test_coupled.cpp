@@ -31,6 +31,7 @@
 #include "sim/dem/system.hpp"
 #include "sim/fluid/solver.hpp"
 #include "sim/run.hpp"
+#include "temp_dir.hpp"
 
 namespace {
 
@@ -41,22 +42,7 @@ using cgd::fluid::FluidSolver;
 constexpr double kPi = std::numbers::pi;
 
 /// A fresh directory under the system's temporary directory, removed with its contents at scope exit.
-class TempDir {
- public:
-  TempDir() {
-    std::string pattern = (fs::temp_directory_path() / "cgd_coupled_XXXXXX").string();
-    if (!mkdtemp(pattern.data())) throw std::runtime_error("mkdtemp failed");
-    path_ = pattern;
-  }
-  ~TempDir() {
-    std::error_code ec;
-    fs::remove_all(path_, ec);
-  }
-  const fs::path& path() const { return path_; }
-
- private:
-  fs::path path_;
-};
+using cgd::testing::TempDir;
 
 /// Base scene of these tests: air and 75 um, 1500 kg/m^3 particles (docs/models.md's Table 1), periodic box,
 /// two-way coupling; everything else comes as overrides. Contacts are soft (t_c = 0.3 ms, k_n = 0.018

@@ -42,6 +42,7 @@
 #include "core/scene.hpp"
 #include "fit/fitter.hpp"
 #include "sim/run.hpp"
+#include "temp_dir.hpp"
 
 namespace {
 
@@ -54,22 +55,7 @@ using cgd::Radl2014Curves;
 
 const DragParams kAir{1.3, 1.8e-5, 75e-6};
 
-class TempDir {
- public:
-  TempDir() {
-    std::string pattern = (fs::temp_directory_path() / "cgd_filtered_XXXXXX").string();
-    if (!mkdtemp(pattern.data())) throw std::runtime_error("mkdtemp failed");
-    path_ = pattern;
-  }
-  ~TempDir() {
-    std::error_code ec;
-    fs::remove_all(path_, ec);
-  }
-  fs::path operator/(const std::string& name) const { return path_ / name; }
-
- private:
-  fs::path path_;
-};
+using cgd::testing::TempDir;
 
 std::string source_dir() {
   const char* s = std::getenv("CGD_SOURCE_DIR");

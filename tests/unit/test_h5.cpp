@@ -14,6 +14,7 @@
 
 #include "core/error.hpp"
 #include "core/h5.hpp"
+#include "temp_dir.hpp"
 
 namespace fs = std::filesystem;
 using cgd::h5::File;
@@ -22,17 +23,9 @@ namespace {
 
 class H5Test : public ::testing::Test {
  protected:
-  void SetUp() override {
-    std::string templ = (fs::temp_directory_path() / "cgd_test_h5_XXXXXX").string();
-    ASSERT_NE(mkdtemp(templ.data()), nullptr);
-    dir_ = templ;
-  }
-  void TearDown() override {
-    std::error_code ec;
-    fs::remove_all(dir_, ec);
-  }
   std::string path(const std::string& name) const { return (dir_ / name).string(); }
-  fs::path dir_;
+  cgd::testing::TempDir tmp_{"cgd_test_h5"};
+  const fs::path& dir_ = tmp_.path();
 };
 
 /// The file type HDF5 stores for a dataset, as a class and a size in bytes.

@@ -22,6 +22,7 @@
 #include "core/output.hpp"
 #include "core/scene.hpp"
 #include "core/series.hpp"
+#include "temp_dir.hpp"
 
 namespace fs = std::filesystem;
 using cgd::h5::File;
@@ -55,21 +56,9 @@ cgd::Scene test_scene(bool dry = false) {
 
 class OutputTest : public ::testing::Test {
  protected:
-  void SetUp() override {
-    std::string templ = (fs::temp_directory_path() / "cgd_test_output_XXXXXX").string();
-    ASSERT_NE(mkdtemp(templ.data()), nullptr);
-    dir_ = templ;
-  }
-  void TearDown() override {
-    if (std::getenv("CGD_KEEP_TEST_FILES")) {
-      std::printf("kept test files in %s\n", dir_.c_str());
-      return;
-    }
-    std::error_code ec;
-    fs::remove_all(dir_, ec);
-  }
   std::string path(const std::string& name) const { return (dir_ / name).string(); }
-  fs::path dir_;
+  cgd::testing::TempDir tmp_{"cgd_test_output"};
+  const fs::path& dir_ = tmp_.path();
 };
 
 /// Three particles with every optional array, and a (n_x, n_y, n_z) = (4, 5, 3) fluid grid whose

@@ -22,6 +22,7 @@
 #include "core/h5.hpp"
 #include "core/output.hpp"
 #include "core/scene.hpp"
+#include "temp_dir.hpp"
 
 namespace fs = std::filesystem;
 
@@ -78,19 +79,6 @@ struct Fields {
 
 class XdmfTest : public ::testing::Test {
  protected:
-  void SetUp() override {
-    std::string templ = (fs::temp_directory_path() / "cgd_test_xdmf_XXXXXX").string();
-    ASSERT_NE(mkdtemp(templ.data()), nullptr);
-    dir_ = templ;
-  }
-  void TearDown() override {
-    if (std::getenv("CGD_KEEP_TEST_FILES")) {
-      std::printf("kept test files in %s\n", dir_.c_str());
-      return;
-    }
-    std::error_code ec;
-    fs::remove_all(dir_, ec);
-  }
 
   /// A run directory `name` with snapshots at steps 0 and 10 and its run.xmf; returns the xmf text.
   std::string write_run(const std::string& name, bool coupled) {
@@ -120,7 +108,8 @@ class XdmfTest : public ::testing::Test {
     return text.str();
   }
 
-  fs::path dir_;
+  cgd::testing::TempDir tmp_{"cgd_test_xdmf"};
+  const fs::path& dir_ = tmp_.path();
 };
 
 /// The datasets of `group` in an HDF5 file, listed by HDF5 itself.
