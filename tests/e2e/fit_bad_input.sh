@@ -87,7 +87,7 @@ if [ -x "$generate" ]; then
   }
   gen_bad generate-radl2014 "fluid.drag" --set 'fluid.drag="radl2014"'
   gen_bad generate-model "coarse-grid runs" --set 'fluid.drag="model"' --set "fluid.drag_model=\"$tmp/model.h5\""
-  gen_bad generate-missing-model "fluid.drag_model" --set 'fluid.drag="model"' --set "fluid.drag_model=\"$tmp/none.h5\""
+  # (a missing model file: cgd-generate refuses the law itself before it looks for the file)
 fi
 
 [ $failures -eq 0 ] || { echo "$failures failure(s)"; exit 1; }
