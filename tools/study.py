@@ -30,7 +30,17 @@ def batch_mean(t, y, t0, batches=10):
     return np.sum(dt * y) / np.sum(dt), means.std(ddof=1) / np.sqrt(batches)
 
 
+def run_ranks(run, default):
+    """MPI ranks of a run's last session: the checkpoint's `ranks` attribute, else `default`."""
+    try:
+        with h5py.File(os.path.join(run, "checkpoint.h5"), "r") as c:
+            return int(c.attrs["ranks"])
+    except (OSError, KeyError):
+        return default
+
+
 def resolved_row(run, ranks, start_tref):
+    ranks = run_ranks(run, ranks)
     s = h5py.File(os.path.join(run, "series.h5"), "r")
     p = s["params"].attrs
     ut, tref = p["u_t_m_s"], p["t_ref_s"]
@@ -69,7 +79,8 @@ def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--coarse", nargs="+", default=[])
     ap.add_argument("--resolved", nargs="+", default=[])
-    ap.add_argument("--resolved-ranks", type=int, default=1)
+    ap.add_argument("--resolved-ranks", type=int, default=1,
+                    help="ranks of the resolved runs when their checkpoint does not say (default 1)")
     ap.add_argument("--start-tref", type=float, default=15.0, help="start of the sampling window (t_ref)")
     ap.add_argument("-o", "--output", required=True, help="output stem: STEM.csv, STEM.h5, STEM.png")
     a = ap.parse_args()
