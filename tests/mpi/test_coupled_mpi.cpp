@@ -27,6 +27,7 @@
 #include "core/h5.hpp"
 #include "core/scene.hpp"
 #include "sim/run.hpp"
+#include "tests/unit/run_quietly.hpp"
 
 namespace {
 
@@ -63,20 +64,7 @@ pressure_gradient_force = true
 end_time = 0.005
 )";
 
-void run_quietly(const cgd::Scene& scene, const fs::path& dir, MPI_Comm comm) {
-  cgd::RunSettings rs;
-  rs.output_dir = dir.string();
-  rs.quiet = true;
-  std::ostringstream sink;
-  std::streambuf* old = std::cout.rdbuf(sink.rdbuf());
-  try {
-    cgd::run_scene(scene, rs, comm);
-  } catch (...) {
-    std::cout.rdbuf(old);
-    throw;
-  }
-  std::cout.rdbuf(old);
-}
+using cgd::testing::run_quietly;
 
 fs::path last_snapshot(const fs::path& run) {
   std::vector<fs::path> files;

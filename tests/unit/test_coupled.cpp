@@ -31,6 +31,7 @@
 #include "sim/dem/system.hpp"
 #include "sim/fluid/solver.hpp"
 #include "sim/run.hpp"
+#include "run_quietly.hpp"
 #include "temp_dir.hpp"
 
 namespace {
@@ -42,6 +43,7 @@ using cgd::fluid::FluidSolver;
 constexpr double kPi = std::numbers::pi;
 
 /// A fresh directory under the system's temporary directory, removed with its contents at scope exit.
+using cgd::testing::run_quietly;
 using cgd::testing::TempDir;
 
 /// Base scene of these tests: air and 75 um, 1500 kg/m^3 particles (docs/models.md's Table 1), periodic box,
@@ -90,22 +92,6 @@ std::string num(double v) {
 }
 
 /// run_scene into dir/run on MPI_COMM_SELF, its banner and timing table kept out of the test log.
-fs::path run_quietly(const cgd::Scene& scene, const TempDir& dir) {
-  cgd::RunSettings rs;
-  rs.output_dir = (dir.path() / "run").string();
-  rs.quiet = true;
-  std::ostringstream sink;
-  std::streambuf* old = std::cout.rdbuf(sink.rdbuf());
-  try {
-    cgd::run_scene(scene, rs, MPI_COMM_SELF);
-  } catch (...) {
-    std::cout.rdbuf(old);
-    throw;
-  }
-  std::cout.rdbuf(old);
-  return rs.output_dir;
-}
-
 cgd::schema::Series read_series(const fs::path& run) {
   return cgd::schema::Series::read((run / "series.h5").string(), MPI_COMM_SELF);
 }

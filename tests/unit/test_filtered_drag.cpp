@@ -42,6 +42,7 @@
 #include "core/scene.hpp"
 #include "fit/fitter.hpp"
 #include "sim/run.hpp"
+#include "run_quietly.hpp"
 #include "temp_dir.hpp"
 
 namespace {
@@ -55,6 +56,7 @@ using cgd::Radl2014Curves;
 
 const DragParams kAir{1.3, 1.8e-5, 75e-6};
 
+using cgd::testing::run_quietly;
 using cgd::testing::TempDir;
 
 std::string source_dir() {
@@ -369,22 +371,6 @@ TEST(FilteredDragScene, DragModelKeyValidatedAndChecksumRecorded) {
 }
 
 // ---- the engine with a filtered law -------------------------------------------------------------------
-
-fs::path run_quietly(const cgd::Scene& scene, const TempDir& dir) {
-  cgd::RunSettings rs;
-  rs.output_dir = (dir / "run").string();
-  rs.quiet = true;
-  std::ostringstream sink;
-  std::streambuf* old = std::cout.rdbuf(sink.rdbuf());
-  try {
-    cgd::run_scene(scene, rs, MPI_COMM_SELF);
-  } catch (...) {
-    std::cout.rdbuf(old);
-    throw;
-  }
-  std::cout.rdbuf(old);
-  return rs.output_dir;
-}
 
 // A homogeneous suspension (too small a box to cluster, 4^3 cells of 3 d_p) run by the engine with a
 // filtered law settles at the slip of the balance V_p eps (rho_p - rho_f) g = V_p beta_bar(phi, w) w with
