@@ -40,8 +40,20 @@ def main():
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    styles = {"micro": dict(mfc="white"), "model": dict()}
-    law = lambda r: "model" if r["drag"] == "model" else "micro"
+    def coarse_curves(ax, candidates, x, x_format):
+        """The coarse runs among `candidates` against `x`: one curve and table rows per law (the micro law
+        open, the filtered model filled; the parcel fit's model-raw runs left out)."""
+        for name, color, label, style in (("micro", "k", "micro law", dict(mfc="white")),
+                                          ("model", "b", "filtered model", dict())):
+            pts = sorted([r for r in candidates if r["kind"] == "coarse" and r["drag"] != "model-raw"
+                          and ("model" if r["drag"] == "model" else "micro") == name], key=lambda r: r[x])
+            for r in pts:
+                print(f"{r['phi']:5.2f} {r[x]:{x_format}} {name:>9} {r['slip']:7.3f} +- {r['slip_se']:5.3f} "
+                      f"{100 * r['error']:6.1f} +- {100 * r['error_se']:4.1f} {r['cost']:9.3g}")
+            if pts:
+                ax.errorbar([r[x] for r in pts], [r["slip"] for r in pts], yerr=[r["slip_se"] for r in pts],
+                            fmt="o-", color=color, label=label, **style)
+
     # ---- Figure 2 ----
     fig, axes = plt.subplots(1, len(phis), figsize=(4 * len(phis), 3.8), squeeze=False)
     print("Figure 2: <u_slip,y>/u_t against Delta/d_p (alpha = 1)")
@@ -51,15 +63,7 @@ def main():
         for r in res:
             ax.errorbar(r["cell_over_dp"], r["slip"], yerr=r["slip_se"], fmt="s", color="r", label="resolved")
             print(f"{phi:5.2f} {r['cell_over_dp']:9.2f} {'resolved':>9} {r['slip']:7.3f} +- {r['slip_se']:5.3f} {'':>14} {r['cost']:9.3g}")
-        for name, color in (("micro", "k"), ("model", "b")):
-            pts = sorted([r for r in rows if r["phi"] == phi and r["kind"] == "coarse" and r["alpha"] == 1 and law(r) == name
-                          and r["drag"] != "model-raw"], key=lambda r: r["cell_over_dp"])
-            for r in pts:
-                print(f"{phi:5.2f} {r['cell_over_dp']:9.2f} {name:>9} {r['slip']:7.3f} +- {r['slip_se']:5.3f} "
-                      f"{100 * r['error']:6.1f} +- {100 * r['error_se']:4.1f} {r['cost']:9.3g}")
-            if pts:
-                ax.errorbar([r["cell_over_dp"] for r in pts], [r["slip"] for r in pts], yerr=[r["slip_se"] for r in pts],
-                            fmt="o-", color=color, label="micro law" if name == "micro" else "filtered model", **styles[name])
+        coarse_curves(ax, [r for r in rows if r["phi"] == phi and r["alpha"] == 1], "cell_over_dp", "9.2f")
         ax.set_xlabel("Δ_fluid / d_p")
         ax.set_title(f"⟨φ⟩ = {phi:g}", fontsize=10)
         ax.set_ylabel("⟨u_slip,y⟩ / u_t")
@@ -75,15 +79,7 @@ def main():
         for r in [r for r in rows if r["phi"] == phi and r["kind"] == "resolved"]:
             ax.axhspan(r["slip"] - r["slip_se"], r["slip"] + r["slip_se"], color="r", alpha=0.2, label="resolved")
             ax.axhline(r["slip"], color="r", lw=1)
-        for name, color in (("micro", "k"), ("model", "b")):
-            pts = sorted([r for r in rows if r["phi"] == phi and r["kind"] == "coarse" and abs(r["cell_over_dp"] - coarsest) < 1e-6
-                          and law(r) == name and r["drag"] != "model-raw"], key=lambda r: r["alpha"])
-            for r in pts:
-                print(f"{phi:5.2f} {r['alpha']:5.0f} {name:>9} {r['slip']:7.3f} +- {r['slip_se']:5.3f} "
-                      f"{100 * r['error']:6.1f} +- {100 * r['error_se']:4.1f} {r['cost']:9.3g}")
-            if pts:
-                ax.errorbar([r["alpha"] for r in pts], [r["slip"] for r in pts], yerr=[r["slip_se"] for r in pts],
-                            fmt="o-", color=color, label="micro law" if name == "micro" else "filtered model", **styles[name])
+        coarse_curves(ax, [r for r in rows if r["phi"] == phi and abs(r["cell_over_dp"] - coarsest) < 1e-6], "alpha", "5.0f")
         ax.set_xlabel("parcel size α")
         ax.set_title(f"⟨φ⟩ = {phi:g}, Δ = {coarsest:.3g} d_p", fontsize=10)
         ax.set_ylabel("⟨u_slip,y⟩ / u_t")
