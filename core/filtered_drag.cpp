@@ -215,6 +215,10 @@ DragModel load_drag_model(const std::string& path) {
   m.gravity_m_s2 = f.attr_double("/", "gravity_m_s2");
   if (!(m.l_char_m > 0) || !(m.phi_crit > 0 && m.phi_crit < 1) || !(m.h_max > 0 && m.h_max < 1))
     throw InputError(path + ": l_char_m must be > 0, phi_crit and h_max in (0, 1)");
+  // width_exponent arrived after version 1's first files: absent means the paper's form (n = 1)
+  m.width_exponent = f.has_attr("/", "width_exponent") ? f.attr_double("/", "width_exponent") : 1.0;
+  if (!(m.width_exponent > 0 && m.width_exponent <= 10))
+    throw InputError(path + ": width_exponent = " + number(m.width_exponent) + ": must be in (0, 10]");
   m.h_spline = read_spline(f, "/h");
   m.log_a_spline = read_spline(f, "/log_a");
   if (!f.exists("/c_corr")) throw InputError(path + ": drag model file lacks the group /c_corr");

@@ -3,8 +3,9 @@
 //
 // Model (Radl & Sundaresan 2014, Chem. Eng. Sci. 117:416, the journal version of the paper's eqs. 6-9;
 // docs/models.md, "Filtered drag model"):
-//   beta_bar_p = c_corr(alpha) [1 - h(phi) / (1 + a(phi) F)] beta_p,micro(phi, |u - v|),
+//   beta_bar_p = c_corr(alpha) [1 - h(phi) / (1 + a(phi) F^n)] beta_p,micro(phi, |u - v|),
 //   F = L_char / Delta,   Delta = cube root of the fluid cell volume of the run using the law,
+//   n = 1 (the paper's form; Radl2014Curves) or the exponent fitted by cgd-fit (--width-exponent fit),
 //   c_corr(alpha) = a_c + (1 - a_c) exp(-k_c (alpha - 1)),   alpha = d_parcel / d_prim,
 // phi the solids fraction at the particle, L_char = (u_t^2/g) Fr_p^(-2/3) with docs/models.md's u_t
 // (Schiller-Naumann). The correction factor depends on phi only, not on the slip, so the filtered
@@ -18,6 +19,7 @@
 //   SplineCurves    a model file written by cgd-fit (docs/schema-drag-model.md): B-splines of h and
 //                   log a with their extensions below phi_crit and above the fitted range.
 // Hot loops choose the law once with visit_any_drag_law (no virtual call per particle).
+#include <cmath>
 #include <cstdint>
 #include <memory>
 #include <string>
@@ -74,6 +76,7 @@ struct DragModel {
   BSpline h_spline;         // h on [phi_crit, phi_max] (identity, clamped to [0, h_max])
   BSpline log_a_spline;     // log a on [phi_crit, phi_max]
   double h_max = 0.99;      // upper clamp of h (h < 1 keeps beta_bar > 0)
+  double width_exponent = 1;  // n of the width dependence 1/(1 + a F^n); 1 = Radl & Sundaresan's form
   double c_corr_a = 0.0, c_corr_k = 0.05;
   std::string c_corr_source;  // "paper" (Radl & Sundaresan 2014) or "parcel-fit"
 };
@@ -98,15 +101,15 @@ struct FilteredDrag {
   Params params;
   Micro micro;
   Curves curves;
-  double filter_ratio = 0;  // F = L_char / Delta
-  double c_corr = 1;        // c_corr(alpha)
+  double filter_term = 0;  // F^n, F = L_char / Delta (n = 1 for Radl 2014)
+  double c_corr = 1;       // c_corr(alpha)
 
-  FilteredDrag(const Micro& base, const Curves& c, double F, double parcel_corr)
-      : params(base.params), micro(base), curves(c), filter_ratio(F), c_corr(parcel_corr) {}
+  FilteredDrag(const Micro& base, const Curves& c, double F_to_n, double parcel_corr)
+      : params(base.params), micro(base), curves(c), filter_term(F_to_n), c_corr(parcel_corr) {}
 
   /// beta_bar / beta_micro (dimensionless) at solids fraction phi.
   double correction(double phi) const {
-    return c_corr * (1.0 - curves.h(phi) / (1.0 + curves.a(phi) * filter_ratio));
+    return c_corr * (1.0 - curves.h(phi) / (1.0 + curves.a(phi) * filter_term));
   }
   double reynolds(double phi, double slip_speed) const { return micro.reynolds(phi, slip_speed); }
   double beta_p(double phi, double slip_speed) const {
@@ -139,7 +142,8 @@ void check_filtered_setup(DragLaw law, const FilteredDragSetup& setup);
 /// calls visit(evaluator). For Radl2014 the base law is Beetstra (the published model's) and c_corr
 /// uses the paper's a_c = 0, k_c = 0.05; for Model, the file's base law, L_char and c_corr. F is
 /// setup.l_char_m / setup.filter_width_m for Radl2014 and model->l_char_m / filter_width_m for Model
-/// (the model's L_char equals the run's when check_model_matches_scene passed).
+/// (the model's L_char equals the run's when check_model_matches_scene passed), raised to the file's
+/// width_exponent.
 template <class Visitor>
 decltype(auto) visit_any_drag_law(DragLaw law, const DragParams& params, const FilteredDragSetup& setup,
                                   Visitor&& visit) {
@@ -154,11 +158,11 @@ decltype(auto) visit_any_drag_law(DragLaw law, const DragParams& params, const F
   if (law == DragLaw::Model) {
     check_filtered_setup(law, setup);
     const DragModel& m = *setup.model;
-    const double F = m.l_char_m / setup.filter_width_m;
+    const double F_to_n = std::pow(m.l_char_m / setup.filter_width_m, m.width_exponent);
     const double corr = setup.parcel_correction ? parcel_correction(setup.parcel_size, m.c_corr_a, m.c_corr_k) : 1.0;
     const SplineCurves curves{&m};
     return visit_drag_law(m.base_law, params, [&](const auto& micro) {
-      return visit(FilteredDrag<std::decay_t<decltype(micro)>, SplineCurves>(micro, curves, F, corr));
+      return visit(FilteredDrag<std::decay_t<decltype(micro)>, SplineCurves>(micro, curves, F_to_n, corr));
     });
   }
   return visit_drag_law(law, params, std::forward<Visitor>(visit));

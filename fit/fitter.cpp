@@ -39,6 +39,7 @@ const double kNaN = std::numeric_limits<double>::quiet_NaN();
 struct Series {
   std::size_t file = 0, width = 0;
   double F = 0;
+  double Fn = 0;  // F^n, n the width exponent: the variable of the form h/(1 + a F^n)
   bool whole_box = false;
   bool fitted = true;  // a box filter at least min_width_over_cell cells wide
   std::vector<double> H, sigma;
@@ -51,9 +52,9 @@ using Weights = std::vector<std::vector<double>>;
 /// Observations of every width of every file. With weights[f] non-empty, H and count of file f are
 /// recomputed from its per-snapshot sums, H = 1 - sum m N / sum m M (docs/schema-filtered.md), and
 /// sigma is scaled by sqrt(n_snapshots / sum m) (fewer snapshots, wider interval); weights[f] all zero
-/// leaves the file out.
+/// leaves the file out. n: the width exponent (Series::Fn = F^n).
 std::vector<Series> observe(const std::vector<FilteredFile>& files, const Weights* weights,
-                            double min_width_over_cell) {
+                            double min_width_over_cell, double n) {
   std::vector<Series> out;
   for (std::size_t f = 0; f < files.size(); ++f) {
     const FilteredFile& file = files[f];
@@ -71,6 +72,7 @@ std::vector<Series> observe(const std::vector<FilteredFile>& files, const Weight
       s.file = f;
       s.width = w;
       s.F = ws.F;
+      s.Fn = std::pow(ws.F, n);
       s.whole_box = ws.whole_box;
       s.fitted = !ws.whole_box && !(ws.width_over_cell < min_width_over_cell - 1e-9);
       s.H.assign(nb, kNaN);
@@ -239,7 +241,7 @@ std::vector<BinEstimate> fit_bins(const std::vector<FilteredFile>& files, const 
     double phi_sum = 0, count_sum = 0;
     for (const Series& s : series) {
       if (!usable(s, b, static_cast<double>(o.min_count))) continue;
-      pts.F.push_back(s.F);
+      pts.F.push_back(s.Fn);  // the bin fit sees F^n: H = h/(1 + a F^n) is h/(1 + a x) in x = F^n
       pts.H.push_back(s.H[b]);
       pts.sigma.push_back(s.sigma[b]);
       distinct_F.insert(s.F);
@@ -393,6 +395,58 @@ double quantile(std::vector<double>& v, double q) {
   return i + 1 < v.size() ? v[i] * (1 - frac) + v[i + 1] * frac : v[i];
 }
 
+/// Pooled chi^2 of the per-bin fits at width exponent n, over the bins fitted at n (and their count).
+double pooled_chi2(const std::vector<FilteredFile>& files, const FitOptions& o, double n, int& dof) {
+  const std::vector<BinEstimate> bins = fit_bins(files, observe(files, nullptr, o.min_width_over_cell, n), o);
+  double chi2 = 0;
+  dof = 0;
+  for (const BinEstimate& b : bins)
+    if (b.used) chi2 += b.chi2, dof += b.widths - 2;  // h, a per bin
+  dof -= 1;                                          // n, shared
+  return chi2;
+}
+
+/// Step 0 with --width-exponent fit: n minimises the chi^2 of the per-bin fits of H = h/(1 + a F^n) pooled over
+/// the bins (one n for every phi: the profile over n of the joint fit of (h_b, a_b, n)). A grid n = 0.25 ...
+/// 6 in steps of 0.05, then steps of 0.005 around the best point. The 95 % interval is where the profile
+/// rises by 3.84 s^2 above its minimum, s^2 = max(1, chi^2_min/dof) (the bins' intervals scaled by the
+/// misfit, as for a weighted fit whose sigmas are relative). Records the profile in R.
+double fit_width_exponent(const std::vector<FilteredFile>& files, const FitOptions& o, FitResult& R) {
+  std::vector<double>& grid = R.exponent_grid;
+  std::vector<double>& chi2 = R.exponent_chi2;
+  auto add = [&](double n) {
+    int dof = 0;
+    grid.push_back(n);
+    chi2.push_back(pooled_chi2(files, o, n, dof));
+    return dof;
+  };
+  for (int k = 0; k <= 115; ++k) add(0.25 + 0.05 * k);
+  std::size_t best = static_cast<std::size_t>(std::min_element(chi2.begin(), chi2.end()) - chi2.begin());
+  const double coarse = grid[best];
+  for (int k = -10; k <= 10; ++k)
+    if (k != 0 && coarse + 0.005 * k > 0.2) add(coarse + 0.005 * k);
+  // sort the profile by n (the report and the model file show it as a curve)
+  std::vector<std::size_t> order(grid.size());
+  std::iota(order.begin(), order.end(), 0);
+  std::sort(order.begin(), order.end(), [&](std::size_t i, std::size_t j) { return grid[i] < grid[j]; });
+  std::vector<double> g2, c2;
+  for (std::size_t i : order) g2.push_back(grid[i]), c2.push_back(chi2[i]);
+  grid = g2;
+  chi2 = c2;
+  best = static_cast<std::size_t>(std::min_element(chi2.begin(), chi2.end()) - chi2.begin());
+  int dof = 0;
+  const double chi2_min = pooled_chi2(files, o, grid[best], dof);
+  R.exponent_chi2_per_dof = dof > 0 ? chi2_min / dof : kNaN;
+  const double threshold = chi2_min + 3.84 * std::max(1.0, std::isfinite(R.exponent_chi2_per_dof) ? R.exponent_chi2_per_dof : 1.0);
+  std::size_t lo = best, hi = best;
+  while (lo > 0 && chi2[lo - 1] <= threshold) --lo;
+  while (hi + 1 < grid.size() && chi2[hi + 1] <= threshold) ++hi;
+  R.width_exponent_low = grid[lo];
+  R.width_exponent_high = grid[hi];
+  R.width_exponent_at_bound = best == 0 || best + 1 == grid.size();
+  return grid[best];
+}
+
 std::string file_list(const std::vector<FilteredFile>& files) {
   std::string s;
   for (std::size_t i = 0; i < files.size(); ++i) s += (i ? ", " : "") + files[i].path;
@@ -426,8 +480,15 @@ FitResult fit_filtered_drag(const std::vector<FilteredFile>& files, const FitOpt
                      " narrower not used), at least " + std::to_string(o.min_widths) +
                      " needed (2 parameters per bin + 1 degree of freedom)");
 
+  // ---- step 0: the width exponent n (given, or the minimum of the pooled chi^2 of the bin fits)
+  const double n = o.fit_width_exponent ? fit_width_exponent(files, o, R) : o.width_exponent;
+  R.width_exponent = n;
+  if (log && o.fit_width_exponent)
+    *log << "cgd-fit: width exponent n = " << n << " [" << R.width_exponent_low << ", " << R.width_exponent_high
+         << "] (profile of the pooled chi^2 over " << R.exponent_grid.size() << " values)\n";
+
   // ---- steps 1 and 2 on the data as filtered
-  const std::vector<Series> series = observe(files, nullptr, o.min_width_over_cell);
+  const std::vector<Series> series = observe(files, nullptr, o.min_width_over_cell, n);
   R.bins = fit_bins(files, series, o);
   int used = 0;
   double phi_max = o.phi_crit;
@@ -461,6 +522,7 @@ FitResult fit_filtered_drag(const std::vector<FilteredFile>& files, const FitOpt
   M.l_char_m = p.l_char_m;
   M.phi_crit = o.phi_crit;
   M.h_max = o.h_max;
+  M.width_exponent = n;
   M.diameter_m = p.diameter_m;
   M.particle_density_kg_m3 = p.particle_density_kg_m3;
   M.fluid_density_kg_m3 = p.fluid_density_kg_m3;
@@ -487,10 +549,12 @@ FitResult fit_filtered_drag(const std::vector<FilteredFile>& files, const FitOpt
     }
   }
   for (double F : R.band_F)
-    for (std::size_t i = 0; i < R.band_phi.size(); ++i) R.H.push_back(R.h[i] / (1.0 + R.a[i] * F));
+    for (std::size_t i = 0; i < R.band_phi.size(); ++i) R.H.push_back(R.h[i] / (1.0 + R.a[i] * std::pow(F, n)));
 
   // ---- step 3: bootstrap
   const std::size_t nphi = R.band_phi.size(), nF = R.band_F.size();
+  std::vector<double> band_Fn;
+  for (double F : R.band_F) band_Fn.push_back(std::pow(F, n));
   R.h_low = R.h_high = R.a_low = R.a_high = std::vector<double>(nphi, kNaN);
   R.H_low = R.H_high = std::vector<double>(nphi * nF, kNaN);
   const bool blocks =
@@ -527,7 +591,7 @@ FitResult fit_filtered_drag(const std::vector<FilteredFile>& files, const FitOpt
               for (std::size_t k : pick) wts[f][k] += 1.0;
             }
         }
-        rs = observe(files, &wts, o.min_width_over_cell);
+        rs = observe(files, &wts, o.min_width_over_cell, n);
         // keep the data's intervals (not rescaled by the resampled snapshot count: it is n on average)
         for (std::size_t i = 0; i < rs.size(); ++i) rs[i].sigma = series[i].sigma;
       } else {
@@ -553,7 +617,7 @@ FitResult fit_filtered_drag(const std::vector<FilteredFile>& files, const FitOpt
         const double h = replica_curves.h(R.band_phi[i]), a = replica_curves.a(R.band_phi[i]);
         rep_h[i].push_back(h);
         rep_a[i].push_back(a);
-        for (std::size_t j = 0; j < nF; ++j) rep_H[j * nphi + i].push_back(h / (1.0 + a * R.band_F[j]));
+        for (std::size_t j = 0; j < nF; ++j) rep_H[j * nphi + i].push_back(h / (1.0 + a * band_Fn[j]));
       }
     }
     if (rep_h.front().empty()) throw RunError("bootstrap: every replicate lost too many bins to fit");
@@ -599,8 +663,8 @@ FitResult fit_filtered_drag(const std::vector<FilteredFile>& files, const FitOpt
       R.a_low[i] = std::exp(std::max(log_lo, kLogAMin));  // the per-bin bounds of a
       R.a_high[i] = std::exp(std::min(log_hi, kLogAMax));
       for (std::size_t j = 0; j < nF; ++j) {
-        const double g = 1.0 / (1.0 + R.a[i] * R.band_F[j]);
-        const double dH_dlog_a = -R.h[i] * R.a[i] * R.band_F[j] * g * g;
+        const double g = 1.0 / (1.0 + R.a[i] * band_Fn[j]);
+        const double dH_dlog_a = -R.h[i] * R.a[i] * band_Fn[j] * g * g;
         const std::size_t k = j * nphi + i;
         widen(R.H[k], R.H_low[k], R.H_high[k], g * g * vh + dH_dlog_a * dH_dlog_a * va);
       }
@@ -631,8 +695,8 @@ FitResult fit_filtered_drag(const std::vector<FilteredFile>& files, const FitOpt
                                    std::isfinite(s.sigma[b]) && s.sigma[b] > 0 && e.phi >= o.phi_crit)
                                 : (e.used && usable(s, b, static_cast<double>(o.min_count)));
       if (!ok) continue;
-      const double smooth = curves.h(e.phi) / (1.0 + curves.a(e.phi) * s.F);
-      const double model = !s.fitted ? smooth : e.h / (1.0 + std::exp(e.log_a) * s.F);
+      const double smooth = curves.h(e.phi) / (1.0 + curves.a(e.phi) * s.Fn);
+      const double model = !s.fitted ? smooth : e.h / (1.0 + std::exp(e.log_a) * s.Fn);
       const double r = s.H[b] - model;
       sum += r;
       sum_z += r / s.sigma[b];
@@ -673,7 +737,7 @@ FitResult fit_filtered_drag(const std::vector<FilteredFile>& files, const FitOpt
         for (std::size_t k = 0; k < files[f].snapshots(); ++k)
           if (files[f].snapshot_run[k] == run) train[f][k] = 0.0, test[f][k] = 1.0;
       }
-      std::vector<Series> tr = observe(files, &train, o.min_width_over_cell);
+      std::vector<Series> tr = observe(files, &train, o.min_width_over_cell, n);
       if (run < 0)  // file without per-snapshot sums: leave the whole file out
         tr.erase(std::remove_if(tr.begin(), tr.end(), [&](const Series& s) { return s.file == f; }),
                  tr.end());
@@ -701,7 +765,7 @@ FitResult fit_filtered_drag(const std::vector<FilteredFile>& files, const FitOpt
         only[f] = test[f];
         for (std::size_t g = 0; g < files.size(); ++g)
           if (g != f) only[g].assign(files[g].snapshots(), 0.0);
-        te = observe(files, &only, o.min_width_over_cell);
+        te = observe(files, &only, o.min_width_over_cell, n);
       }
       double s2 = 0, s1 = 0;
       for (const Series& s : te) {
@@ -710,8 +774,8 @@ FitResult fit_filtered_drag(const std::vector<FilteredFile>& files, const FitOpt
           const BinEstimate& e = R.bins[b];
           if (!e.used || !(s.count[b] >= static_cast<double>(o.min_count)) || !std::isfinite(s.H[b]))
             continue;
-          const double r = s.H[b] - hc.h(e.phi) / (1.0 + hc.a(e.phi) * s.F);
-          const double r_in = s.H[b] - curves.h(e.phi) / (1.0 + curves.a(e.phi) * s.F);
+          const double r = s.H[b] - hc.h(e.phi) / (1.0 + hc.a(e.phi) * s.Fn);
+          const double r_in = s.H[b] - curves.h(e.phi) / (1.0 + curves.a(e.phi) * s.Fn);
           s1 += r;
           s2 += r * r;
           sq_in += r_in * r_in;

@@ -1,8 +1,12 @@
 #pragma once
 // cgd-fit's fit (docs/fit.md): master curves h(phi), a(phi) of the filtered drag model
-//   H(F, phi) = h(phi) / (1 + a(phi) F),   F = L_char / Delta_filter,   beta_bar / beta_micro = 1 - H
-// (Radl & Sundaresan 2014, Chem. Eng. Sci. 117:416; docs/models.md "Filtered drag model") from filtered files.
+//   H(F, phi) = h(phi) / (1 + a(phi) F^n),   F = L_char / Delta_filter,   beta_bar / beta_micro = 1 - H
+// (Radl & Sundaresan 2014, Chem. Eng. Sci. 117:416, with n = 1; docs/models.md "Filtered drag model") from
+// filtered files. n is given (default 1, the paper's form) or fitted (one n for every phi):
 //
+//  0. with fit_width_exponent: n minimises the chi^2 of step 1 pooled over the bins (a profile over a
+//     grid of n; interval where it rises by 3.84 max(1, chi^2/dof)); steps 1-4 then use that n (the
+//     bands are conditional on it);
 //  1. per phi bin: (h, log a) by weighted nonlinear least squares over every width of every file,
 //       min sum_w ((H_w - h/(1 + a F_w)) / sigma_w)^2,  sigma_w = (H_high - H_low)/(2 * 1.96)
 //     (GSL gsl_multifit_nlinear, trust region with Levenberg-Marquardt steps, started from the best
@@ -39,6 +43,8 @@ struct FitOptions {
   double min_width_over_cell = 2.0;  // narrower filters are not fitted (a one-cell filter averages nothing)
   double h_max = 0.99;               // upper clamp of h (beta_bar > 0)
   bool cross_validate = true;        // leave-one-run-out
+  double width_exponent = 1.0;       // n of 1/(1 + a F^n) (1: Radl & Sundaresan 2014)
+  bool fit_width_exponent = false;   // step 0: fit n instead
 };
 
 /// The per-bin estimate of step 1.
@@ -80,6 +86,11 @@ struct FitResult {
   double lambda_h = 0, lambda_log_a = 0, edf_h = 0, edf_log_a = 0;
   int breakpoints = 0;
   double chi2_per_dof = 0;  // of the per-bin fits, pooled
+  // the width exponent n (given or fitted in step 0), its 95 % interval and the chi^2 profile behind it
+  double width_exponent = 1, width_exponent_low = NAN, width_exponent_high = NAN;
+  double exponent_chi2_per_dof = NAN;
+  bool width_exponent_at_bound = false;  // the profile's minimum at the grid's end (0.25 or 6)
+  std::vector<double> exponent_grid, exponent_chi2;
   int h_clamped = 0;        // band grid points where the raw h spline left [0, h_max]
   // bands (step 3) on a grid
   std::vector<double> band_phi, h, h_low, h_high, a, a_low, a_high;

@@ -24,7 +24,7 @@ int main(int argc, char** argv) {
     bool quiet = false;
     cgd::fit::FitOptions options;
     CLI::App app{
-        "Fit the filtered drag model H(F, phi) = h(phi)/(1 + a(phi) F) to filtered files (cgd-filter) "
+        "Fit the filtered drag model H(F, phi) = h(phi)/(1 + a(phi) F^n) to filtered files (cgd-filter) "
         "and write a drag model file (docs/fit.md)",
         "cgd-fit"};
     app.add_option("filtered", inputs, "Filtered files (cgd-filter), pooled into one fit")
@@ -50,6 +50,11 @@ int main(int argc, char** argv) {
     app.add_option("--breakpoints", options.breakpoints,
                    "Spline breakpoints (default: from the bin count, 5..15)")
         ->check(CLI::Range(4, 100));
+    std::string width_exponent = "1";
+    app.add_option("--width-exponent", width_exponent,
+                   "n of the width dependence H = h(phi)/(1 + a(phi) F^n): a number in (0, 10] or \"fit\" (one n "
+                   "for every phi, from the profile of the pooled chi2; default 1, Radl & Sundaresan's form)")
+        ->type_name("N|fit");
     app.add_flag(
         "--no-cross-validation", [&](std::int64_t) { options.cross_validate = false; },
         "Skip the leave-one-run-out cross-validation");
@@ -61,6 +66,21 @@ int main(int argc, char** argv) {
                    "MODEL.h5 with it (docs/fit.md)")
         ->type_name("MODEL.h5");
     cgd::parse_command_line(app, argc, argv, "cgd-fit");
+    if (width_exponent == "fit") {
+      options.fit_width_exponent = true;
+    } else {
+      std::size_t used = 0;
+      double n = 0;
+      try {
+        n = std::stod(width_exponent, &used);
+      } catch (const std::exception&) {
+        used = 0;
+      }
+      if (used != width_exponent.size() || !(n > 0 && n <= 10))
+        throw cgd::InputError("cgd-fit: --width-exponent " + width_exponent +
+                              ": allowed a number in (0, 10] or \"fit\"");
+      options.width_exponent = n;
+    }
 
     if (!parcel_model.empty()) {
       const cgd::DragModel model = cgd::load_drag_model(parcel_model);

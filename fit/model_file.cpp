@@ -38,8 +38,14 @@ void write_model_file(const std::string& path, const FitResult& R, const std::ve
     schema::write_common(f, "drag_model", scene);
     f.set_attr(
         "/", "model_form",
-        std::string("beta_bar/beta_micro = c_corr(alpha) [1 - h(phi)/(1 + a(phi) F)], F = l_char_m / Delta, "
-                    "Delta = cube root of the fluid cell volume (Radl & Sundaresan 2014)"));
+        std::string("beta_bar/beta_micro = c_corr(alpha) [1 - h(phi)/(1 + a(phi) F^n)], F = l_char_m / Delta, "
+                    "Delta = cube root of the fluid cell volume, n = width_exponent (Radl & Sundaresan 2014: n = 1)"));
+    f.set_attr("/", "width_exponent", M.width_exponent);
+    f.set_attr("/", "width_exponent_fitted", std::int64_t{o.fit_width_exponent ? 1 : 0});
+    if (o.fit_width_exponent) {
+      f.set_attr("/", "width_exponent_low", R.width_exponent_low);
+      f.set_attr("/", "width_exponent_high", R.width_exponent_high);
+    }
     f.set_attr("/", "base_drag", std::string(to_string(M.base_law)));
     f.set_attr("/", "u_t_convention", M.u_t_convention);
     f.set_attr("/", "u_t_m_s", M.u_t_m_s);
@@ -141,6 +147,11 @@ void write_model_file(const std::string& path, const FitResult& R, const std::ve
     f.set_attr(d, "edf_h", R.edf_h);
     f.set_attr(d, "edf_log_a", R.edf_log_a);
     f.set_attr(d, "chi2_per_dof", R.chi2_per_dof);
+    if (!R.exponent_grid.empty()) {  // step 0's profile
+      write_vector(f, d + "/width_exponent_grid", R.exponent_grid);
+      write_vector(f, d + "/width_exponent_chi2", R.exponent_chi2);
+      f.set_attr(d, "width_exponent_chi2_per_dof", R.exponent_chi2_per_dof);
+    }
     f.set_attr(d, "h_clamped_grid_points", static_cast<std::int64_t>(R.h_clamped));
     f.set_attr(d, "cv_rms_H", R.cv_rms);
     f.set_attr(d, "cv_in_sample_rms_H", R.cv_in_sample_rms);
@@ -195,7 +206,11 @@ std::string fit_report(const FitResult& R, const std::vector<FilteredFile>& file
   std::ostringstream out;
   const SplineCurves curves{&R.model};
   const Radl2014Curves radl;
-  out << "cgd-fit: H(F, phi) = h(phi)/(1 + a(phi) F), F = L_char/Delta; " << files.size()
+  const bool n1 = R.model.width_exponent == 1.0;
+  const std::string form = n1 ? "1/(1 + aF)" : "1/(1 + aF^n)";
+  out << "cgd-fit: H(F, phi) = h(phi)/(1 + a(phi) F" << (n1 ? "" : "^n") << "), F = L_char/Delta";
+  if (!n1 || o.fit_width_exponent) out << ", n = " << format("%.3f", R.model.width_exponent);
+  out << "; " << files.size()
       << " filtered file(s), base law " << to_string(R.model.base_law)
       << ", L_char = " << format("%.4g", R.model.l_char_m) << " m\n";
   int used = 0, dropped = 0;
@@ -217,8 +232,23 @@ std::string fit_report(const FitResult& R, const std::vector<FilteredFile>& file
     out << ": " << R.bins[i].dropped << "\n";
     i = j + 1;
   }
+  if (o.fit_width_exponent) {
+    out << "width exponent: n = " << format("%.3f", R.width_exponent) << " [" << format("%.3f", R.width_exponent_low)
+        << ", " << format("%.3f", R.width_exponent_high)
+        << "] (95 %, profile of the pooled chi2 of the per-bin fits, scaled by chi2/dof = "
+        << format("%.2f", R.exponent_chi2_per_dof) << "; Radl 2014: n = 1)";
+    if (R.width_exponent_at_bound) out << "  WARNING: at the end of the searched range [0.25, 6]";
+    out << "\n  chi2 profile:";
+    for (std::size_t i = 0; i < R.exponent_grid.size(); ++i) {
+      const double n = R.exponent_grid[i];
+      if (std::abs(n - 1.0) < 1e-9 || std::abs(n - R.width_exponent) < 1e-9 ||
+          std::abs(std::remainder(n, 0.5)) < 1e-9)
+        out << "  n=" << format("%.3g", n) << ": " << format("%.4g", R.exponent_chi2[i]);
+    }
+    out << "\n";
+  }
   out << "per-bin fits: chi2/dof = " << format("%.2f", R.chi2_per_dof)
-      << " (about 1 when 1/(1 + aF) describes the width dependence within the filter's intervals)\n";
+      << " (about 1 when " << form << " describes the width dependence within the filter's intervals)\n";
   out << "splines: " << R.breakpoints << " breakpoints, GCV smoothing: edf(h) = " << format("%.1f", R.edf_h)
       << ", edf(log a) = " << format("%.1f", R.edf_log_a) << "; h clamped at " << R.h_clamped
       << " grid points\n";
@@ -239,7 +269,7 @@ std::string fit_report(const FitResult& R, const std::vector<FilteredFile>& file
         << format("     %7.3f", curves.a(phi)) << format(" [%7.3f,", R.a_low[i])
         << format("%7.3f]", R.a_high[i]) << format("   %7.3f", radl.a(phi)) << "\n";
   }
-  out << "\nresiduals per width (H - h_bin/(1 + a_bin F), per-bin fits; z = residual/sigma):\n";
+  out << "\nresiduals per width (H - h_bin/(1 + a_bin F" << (n1 ? "" : "^n") << "), per-bin fits; z = residual/sigma):\n";
   out << "  file : group          F     points  mean      mean z   rms z   mean (smoothed model)\n";
   for (const WidthResiduals& w : R.residuals)
     out << "  " << w.file << " : " << w.group << format("  %7.4f", w.F) << format("  %4.0f", double(w.points))
@@ -249,7 +279,7 @@ std::string fit_report(const FitResult& R, const std::vector<FilteredFile>& file
             : !w.fitted ? "   (narrow: smoothed model, not fitted)"
                         : "")
         << "\n";
-  out << "  (a trend of mean z with F would mean 1/(1 + aF) is biased at the smallest or largest widths)\n";
+  out << "  (a trend of mean z with F would mean " << form << " is biased at the smallest or largest widths)\n";
   if (R.cv_runs.empty()) {
     out << "\nleave-one-run-out cross-validation: not possible (one run)\n";
   } else {

@@ -51,6 +51,8 @@ expect_bad other-size-pooled   "$tmp/thick.h5" "diameter_m"                     
 expect_bad too-few-widths      "$tmp/two_widths.h5" "too few filter widths"      -- "$tmp/two_widths.h5"
 expect_bad too-few-bins        "$tmp/three_bins.h5" "too few phi bins"           -- "$tmp/three_bins.h5"
 expect_bad bad-option          "--min-widths"                                    -- "$tmp/good.h5" --min-widths 2
+expect_bad bad-width-exponent  "--width-exponent two" "(0, 10]" "fit"          -- "$tmp/good.h5" --width-exponent two
+expect_bad zero-width-exponent "--width-exponent 0" "(0, 10]"                    -- "$tmp/good.h5" --width-exponent 0
 # the model file's directory does not exist: refused before the fit
 status=0; "$fit" "$tmp/good.h5" -o "$tmp/no/such/dir/model.h5" >"$tmp/stdout" 2>"$tmp/stderr" || status=$?
 if [ $status -eq 2 ] && grep -qF "$tmp/no/such/dir" "$tmp/stderr" && [ ! -e "$tmp/no" ]; then

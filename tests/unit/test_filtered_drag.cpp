@@ -22,6 +22,7 @@
 //       corr = exp(-mpf('0.05')*(al-1)) * (1 - pw(H,phi)/(1 + pw(A,phi)*F)); print(corr*beetstra(phi,w))
 // clang-format on
 #include <gsl/gsl_bspline.h>
+#include <hdf5.h>
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -304,6 +305,41 @@ TEST(DragModelFile, RoundTripKeepsTheCurves) {
   EXPECT_EQ(m.c_corr_source, "paper");
   EXPECT_EQ(m.checksum, cgd::file_checksum_fnv1a(path));
   EXPECT_NO_THROW(cgd::check_model_matches_scene(m, scene_with({})));
+}
+
+// A fitted width exponent n travels through the model file and enters the law as F^n:
+// beta_bar/beta_micro = 1 - h/(1 + a F^n) (c_corr = 1 at alpha = 1), against h, a from the curves and F
+// computed here; a file without the attribute (written before it existed) reads as n = 1.
+TEST(DragModelFile, WidthExponentRoundTripsAndEntersAsFToTheN) {
+  TempDir dir;
+  const std::string path = (dir / "model.h5").string();
+  cgd::DragModel model = line_model();
+  for (double& c : model.h_spline.coefficients) c += 0.5;
+  model.width_exponent = 2.5;
+  write_model(path, model);
+  const cgd::DragModel m = cgd::load_drag_model(path);
+  EXPECT_DOUBLE_EQ(m.width_exponent, 2.5);
+  cgd::FilteredDragSetup setup;
+  setup.model = std::make_shared<cgd::DragModel>(m);
+  setup.filter_width_m = 1.0e-3;
+  setup.l_char_m = m.l_char_m;
+  const double F = m.l_char_m / 1.0e-3;
+  const cgd::SplineCurves c{&m};
+  for (const double phi : {0.05, 0.1, 0.3}) {
+    const double ratio = cgd::beta_p(DragLaw::Model, kAir, setup, phi, 0.1) /
+                         cgd::beta_p(DragLaw::Beetstra, kAir, setup, phi, 0.1);
+    EXPECT_NEAR(ratio, 1.0 - c.h(phi) / (1.0 + c.a(phi) * std::pow(F, 2.5)), 1e-13) << phi;
+    EXPECT_GT(std::abs(ratio - (1.0 - c.h(phi) / (1.0 + c.a(phi) * F))), 1e-3) << "n not applied";
+  }
+  {
+    cgd::h5::File f = cgd::h5::File::open_read(path, MPI_COMM_SELF);
+    EXPECT_DOUBLE_EQ(f.attr_double("/", "width_exponent"), 2.5);
+  }
+  const hid_t file = H5Fopen(path.c_str(), H5F_ACC_RDWR, H5P_DEFAULT);
+  ASSERT_GE(file, 0);
+  ASSERT_GE(H5Adelete(file, "width_exponent"), 0);
+  H5Fclose(file);
+  EXPECT_DOUBLE_EQ(cgd::load_drag_model(path).width_exponent, 1.0);
 }
 
 void expect_input_error(const std::function<void()>& f, const std::vector<std::string>& words) {
