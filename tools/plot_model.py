@@ -2,7 +2,7 @@
 """Plot a drag model file of cgd-fit (docs/schema-drag-model.md).
 
 Left: h(phi) with its 95 % band and the per-bin estimates (the paper's Figure 1); middle: a(phi) the
-same way; right: H(F, phi) = h/(1 + aF) against F for a few phi, with bands at the data's widths.
+same way; right: H(F, phi) = h/(1 + aF^n) against F (n = the file's width_exponent, 1 = the paper's) for a few phi, with bands at the data's widths.
 Radl & Sundaresan 2014 (the published piecewise cubics, data/reference/radl2014-filtered-drag.csv) is
 drawn beside the fit, dashed.
 
@@ -69,6 +69,7 @@ def main():
         phi_crit, h_max = float(f.attrs["phi_crit"]), float(f.attrs["h_max"])
         base = f.attrs["base_drag"]
         cv = f["diagnostics"].attrs["cv_rms_H"]
+        n = float(f.attrs.get("width_exponent", 1.0))  # absent in files older than the attribute: 1
     rh, ra = radl2014()
     phi = b["phi"]
     bound = bins["used"] == 1
@@ -101,7 +102,7 @@ def main():
         ax[1].plot(bins["phi"][bound], bins["a"][bound], "o", mfc="none", ms=5, label="per-bin fit at a bound")
     ax[1].plot(phi, ra(phi), "k--", label="Radl & Sundaresan 2014")
     ax[1].set_ylim(min(b["a"].min(), 1.0) / 5, max(b["a"].max(), 25.0) * 5)
-    ax[1].set(xlabel=r"$\bar\phi_p$", ylabel="a", yscale="log", title="a: width dependence 1/(1 + aF)")
+    ax[1].set(xlabel=r"$\bar\phi_p$", ylabel="a", yscale="log", title="a: width dependence 1/(1 + aF)" if n == 1 else f"a: width dependence 1/(1 + aF^n), n = {n:.2f}")
     ax[1].legend(fontsize=8)
     F = np.geomspace(max(b["F"].min() / 3, 1e-3), b["F"].max() * 3, 100)
     for target in (0.05, 0.1, 0.2, 0.3, 0.4):
@@ -115,7 +116,7 @@ def main():
         else:
             p_j = target
         i = int(np.argmin(abs(phi - p_j)))
-        line, = ax[2].plot(F, b["h"][i] / (1 + b["a"][i] * F), label=rf"$\bar\phi$ = {phi[i]:.2f}")
+        line, = ax[2].plot(F, b["h"][i] / (1 + b["a"][i] * F**n), label=rf"$\bar\phi$ = {phi[i]:.2f}")
         ax[2].fill_between(b["F"], b["H_low"][:, i], b["H_high"][:, i], color=line.get_color(), alpha=0.2)
         if data is not None:
             fitted = data["fitted"] == 1
