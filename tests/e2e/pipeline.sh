@@ -15,7 +15,7 @@ fail() { echo "FAIL $*"; failures=$((failures + 1)); }
 vars=(OUT="$tmp/out" BUILD="$binary_dir" PHIS=0.05 BOX_DP=20 FROM_TREF=0.5 BINS=0.005
       "GENERATE_SET=domain.size_dp=[20,80,20] run.end_time_tref=2 run.dump_interval_tref=0.1 run.sampling_start_tref=0.5"
       "COARSE_SET=domain.size_dp=[20,80,20] run.end_time_tref=2 run.sampling_start_tref=0.5"
-      "FIT_ARGS=--min-width-over-cell 1.4 --min-count 20 --bootstrap 50 --no-cross-validation"
+      "FIT_ARGS=--min-width-over-cell 1.4 --min-count 20 --bootstrap 50 --no-cross-validation --width-exponent fit"
       COARSE_CELLS=4 ALPHAS=1,2)
 make -f Makefile.pipeline -j2 "${vars[@]}" WIDTHS=3.34,5,6.67,10 all >"$tmp/make1.log" 2>&1 || { tail -n 40 "$tmp/make1.log"; fail "first make"; exit 1; }
 for f in generate/phi0.05/DONE filter/filtered.h5 filter/filtered.png fit/model.h5 fit/model_parcels.h5 \
@@ -23,6 +23,14 @@ for f in generate/phi0.05/DONE filter/filtered.h5 filter/filtered.png fit/model.
          study/study.h5 study/study.csv study/study.png study/study_figure2.png study/study_figure3.png; do
   [ -e "$tmp/out/$f" ] || fail "missing $f"
 done
+# the fitted width exponent reached the model file and the parcel fit's copy of it
+/usr/bin/python3 -c '
+import sys, h5py
+for p in sys.argv[1:]:
+    a = h5py.File(p, "r").attrs
+    assert a["width_exponent_fitted"] == 1 and a["width_exponent_low"] <= a["width_exponent"] <= a["width_exponent_high"], p
+    print("ok   %s: width_exponent %.3f [%.3f, %.3f]" % (p.split("/")[-1], a["width_exponent"], a["width_exponent_low"], a["width_exponent_high"]))
+' "$tmp/out/fit/model.h5" "$tmp/out/fit/model_parcels.h5" || fail "width exponent not in the model files"
 grep -q "==== cgd pipeline" "$tmp/make1.log" && echo "ok   pipeline complete, summary printed" || fail "no summary"
 make -f Makefile.pipeline -q "${vars[@]}" WIDTHS=3.34,5,6.67,10 all; q=$?
 [ $q -eq 0 ] && echo "ok   make -q after a complete make: nothing to do" || fail "make -q exit status $q after a complete make"
