@@ -395,55 +395,74 @@ double quantile(std::vector<double>& v, double q) {
   return i + 1 < v.size() ? v[i] * (1 - frac) + v[i + 1] * frac : v[i];
 }
 
-/// Pooled chi^2 of the per-bin fits at width exponent n, over the bins fitted at n (and their count).
-double pooled_chi2(const std::vector<FilteredFile>& files, const FitOptions& o, double n, int& dof) {
-  const std::vector<BinEstimate> bins = fit_bins(files, observe(files, nullptr, o.min_width_over_cell, n), o);
-  double chi2 = 0;
-  dof = 0;
-  for (const BinEstimate& b : bins)
-    if (b.used) chi2 += b.chi2, dof += b.widths - 2;  // h, a per bin
-  dof -= 1;                                          // n, shared
-  return chi2;
+/// chi^2 of each bin's fit at width exponent n (NaN where the bin is not fitted) and its point count.
+struct BinChi2 {
+  std::vector<double> chi2;
+  std::vector<int> widths;
+};
+BinChi2 bin_chi2(const std::vector<FilteredFile>& files, const FitOptions& o, double n) {
+  BinChi2 out;
+  for (const BinEstimate& b : fit_bins(files, observe(files, nullptr, o.min_width_over_cell, n), o)) {
+    out.chi2.push_back(b.used ? b.chi2 : kNaN);
+    out.widths.push_back(b.widths);
+  }
+  return out;
 }
 
 /// Step 0 with --width-exponent fit: n minimises the chi^2 of the per-bin fits of H = h/(1 + a F^n) pooled over
-/// the bins (one n for every phi: the profile over n of the joint fit of (h_b, a_b, n)). A grid n = 0.25 ...
-/// 6 in steps of 0.05, then steps of 0.005 around the best point. The 95 % interval is where the profile
-/// rises by 3.84 s^2 above its minimum, s^2 = max(1, chi^2_min/dof) (the bins' intervals scaled by the
-/// misfit, as for a weighted fit whose sigmas are relative). Records the profile in R.
+/// the bins (one n for every phi: the profile over n of the joint fit of (h_b, a_b, n)), summed over the bins
+/// fitted at every n tried (a bin whose fit fails at some n would otherwise make a false dip). A grid
+/// n = 0.25 ... 6 in steps of 0.05, then steps of 0.005 within 0.05 of the best point. The 95 % interval is
+/// where the profile rises by 3.84 s^2 above its minimum, s^2 = max(1, chi^2_min/dof) (the bins' intervals
+/// scaled by the misfit, as for a weighted fit whose sigmas are relative), its ends interpolated linearly
+/// between grid points; it treats the widths of a bin as independent (they are nested filters of the same
+/// snapshots), so it is a lower bound. Records the profile in R.
 double fit_width_exponent(const std::vector<FilteredFile>& files, const FitOptions& o, FitResult& R) {
+  std::vector<std::pair<double, BinChi2>> tried;
+  for (int k = 0; k <= 115; ++k) tried.push_back({0.25 + 0.05 * k, bin_chi2(files, o, 0.25 + 0.05 * k)});
+  auto pooled = [&](const std::vector<char>& common, const BinChi2& b) {
+    double sum = 0;
+    for (std::size_t i = 0; i < common.size(); ++i)
+      if (common[i]) sum += b.chi2[i];
+    return sum;
+  };
+  auto common_bins = [&]() {
+    std::vector<char> common(tried.front().second.chi2.size(), 1);
+    for (const auto& [n, b] : tried)
+      for (std::size_t i = 0; i < common.size(); ++i) common[i] = common[i] && std::isfinite(b.chi2[i]);
+    return common;
+  };
+  std::vector<char> common = common_bins();
+  std::size_t best = 0;
+  for (std::size_t i = 1; i < tried.size(); ++i)
+    if (pooled(common, tried[i].second) < pooled(common, tried[best].second)) best = i;
+  const double coarse = tried[best].first;
+  for (int k = -9; k <= 9; ++k)  // the coarse grid's neighbours (k = +-10) are already there
+    if (k != 0 && coarse + 0.005 * k > 0.2) tried.push_back({coarse + 0.005 * k, bin_chi2(files, o, coarse + 0.005 * k)});
+  std::sort(tried.begin(), tried.end(), [](const auto& x, const auto& y) { return x.first < y.first; });
+  common = common_bins();
   std::vector<double>& grid = R.exponent_grid;
   std::vector<double>& chi2 = R.exponent_chi2;
-  auto add = [&](double n) {
-    int dof = 0;
-    grid.push_back(n);
-    chi2.push_back(pooled_chi2(files, o, n, dof));
-    return dof;
-  };
-  for (int k = 0; k <= 115; ++k) add(0.25 + 0.05 * k);
-  std::size_t best = static_cast<std::size_t>(std::min_element(chi2.begin(), chi2.end()) - chi2.begin());
-  const double coarse = grid[best];
-  for (int k = -10; k <= 10; ++k)
-    if (k != 0 && coarse + 0.005 * k > 0.2) add(coarse + 0.005 * k);
-  // sort the profile by n (the report and the model file show it as a curve)
-  std::vector<std::size_t> order(grid.size());
-  std::iota(order.begin(), order.end(), 0);
-  std::sort(order.begin(), order.end(), [&](std::size_t i, std::size_t j) { return grid[i] < grid[j]; });
-  std::vector<double> g2, c2;
-  for (std::size_t i : order) g2.push_back(grid[i]), c2.push_back(chi2[i]);
-  grid = g2;
-  chi2 = c2;
+  grid.clear();
+  chi2.clear();
+  for (const auto& [n, b] : tried) grid.push_back(n), chi2.push_back(pooled(common, b));
   best = static_cast<std::size_t>(std::min_element(chi2.begin(), chi2.end()) - chi2.begin());
-  int dof = 0;
-  const double chi2_min = pooled_chi2(files, o, grid[best], dof);
-  R.exponent_chi2_per_dof = dof > 0 ? chi2_min / dof : kNaN;
-  const double threshold = chi2_min + 3.84 * std::max(1.0, std::isfinite(R.exponent_chi2_per_dof) ? R.exponent_chi2_per_dof : 1.0);
+  int dof = -1;  // n, shared
+  for (std::size_t i = 0; i < common.size(); ++i)
+    if (common[i]) dof += tried[best].second.widths[i] - 2;  // h, a per bin
+  R.exponent_chi2_per_dof = dof > 0 ? chi2[best] / dof : kNaN;
+  const double s2 = std::max(1.0, std::isfinite(R.exponent_chi2_per_dof) ? R.exponent_chi2_per_dof : 1.0);
+  const double threshold = chi2[best] + 3.84 * s2;
   std::size_t lo = best, hi = best;
   while (lo > 0 && chi2[lo - 1] <= threshold) --lo;
   while (hi + 1 < grid.size() && chi2[hi + 1] <= threshold) ++hi;
-  R.width_exponent_low = grid[lo];
-  R.width_exponent_high = grid[hi];
-  R.width_exponent_at_bound = best == 0 || best + 1 == grid.size();
+  auto crossing = [&](std::size_t in, std::size_t out) {  // where the profile crosses the threshold
+    return grid[in] + (grid[out] - grid[in]) * (threshold - chi2[in]) / (chi2[out] - chi2[in]);
+  };
+  R.width_exponent_low = lo > 0 ? crossing(lo, lo - 1) : grid[lo];
+  R.width_exponent_high = hi + 1 < grid.size() ? crossing(hi, hi + 1) : grid[hi];
+  // the minimum, or an end of the interval, at the grid's end: the interval is open there
+  R.width_exponent_at_bound = best == 0 || best + 1 == grid.size() || lo == 0 || hi + 1 == grid.size();
   return grid[best];
 }
 

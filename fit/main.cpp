@@ -83,6 +83,9 @@ int main(int argc, char** argv) {
     }
 
     if (!parcel_model.empty()) {
+      if (width_exponent != "1")
+        throw cgd::InputError("cgd-fit: --width-exponent " + width_exponent +
+                              " with --parcel-fit: the parcel fit keeps the model's own width_exponent");
       const cgd::DragModel model = cgd::load_drag_model(parcel_model);
       std::vector<cgd::fit::ParcelRun> runs;
       for (const std::string& dir : inputs) runs.push_back(cgd::fit::read_parcel_run(dir, model.u_t_m_s));

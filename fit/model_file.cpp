@@ -237,7 +237,9 @@ std::string fit_report(const FitResult& R, const std::vector<FilteredFile>& file
         << ", " << format("%.3f", R.width_exponent_high)
         << "] (95 %, profile of the pooled chi2 of the per-bin fits, scaled by chi2/dof = "
         << format("%.2f", R.exponent_chi2_per_dof) << "; Radl 2014: n = 1)";
-    if (R.width_exponent_at_bound) out << "  WARNING: at the end of the searched range [0.25, 6]";
+    if (R.width_exponent_at_bound)
+      out << "  WARNING: the minimum or an end of its interval is at the end of the searched range [0.25, 6] "
+             "(the interval is open there)";
     out << "\n  chi2 profile:";
     for (std::size_t i = 0; i < R.exponent_grid.size(); ++i) {
       const double n = R.exponent_grid[i];
@@ -269,6 +271,9 @@ std::string fit_report(const FitResult& R, const std::vector<FilteredFile>& file
         << format("     %7.3f", curves.a(phi)) << format(" [%7.3f,", R.a_low[i])
         << format("%7.3f]", R.a_high[i]) << format("   %7.3f", radl.a(phi)) << "\n";
   }
+  if (!n1)
+    out << "(a multiplies F^n, n = " << format("%.3f", R.model.width_exponent)
+        << "; Radl 2014's a multiplies F: compare H(F, phi), not a)\n";
   out << "\nresiduals per width (H - h_bin/(1 + a_bin F" << (n1 ? "" : "^n") << "), per-bin fits; z = residual/sigma):\n";
   out << "  file : group          F     points  mean      mean z   rms z   mean (smoothed model)\n";
   for (const WidthResiduals& w : R.residuals)

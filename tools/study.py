@@ -93,19 +93,23 @@ def main():
     keys = ["phi", "cell_over_dp", "alpha", "drag", "slip", "slip_se", "ref_slip", "ref_se", "error", "error_se", "cost", "kind", "run"]
     coarse = [r for r in rows if r["kind"] == "coarse"]
     # a configuration (grid, alpha, drag law) is judged over every solids fraction: its rms error and mean
-    # cost; the Pareto front is over configurations (the parcel fit's own runs, model-raw, are left out)
+    # cost; the Pareto front is over configurations (the parcel fit's own runs, model-raw, are left out).
+    # A configuration run at only some of the solids fractions (Makefile.pipeline ALPHA1_PHIS) is listed
+    # but not compared: its errors and cost are over another set of phi
     configs = {}
     for r in coarse:
         if r["drag"] != "model-raw":
             configs.setdefault((r["cell_over_dp"], r["alpha"], r["drag"]), []).append(r)
     agg = []
     for (cell, alpha, drag), rs in sorted(configs.items()):
-        agg.append(dict(cell_over_dp=cell, alpha=alpha, drag=drag, n=len(rs),
+        agg.append(dict(cell_over_dp=cell, alpha=alpha, drag=drag, n=len({r["phi"] for r in rs}),
                         error=float(np.sqrt(np.mean([r["error"] ** 2 for r in rs]))),
                         worst=float(max(abs(r["error"]) for r in rs)),
                         error_se=float(np.sqrt(np.mean([r["error_se"] ** 2 for r in rs]))),
                         cost=float(np.mean([r["cost"] for r in rs]))))
-    front_cfg = {id(c) for c in pareto(agg)}
+    n_phi = len({r["phi"] for r in coarse})
+    complete = [c for c in agg if c["n"] == n_phi]
+    front_cfg = {id(c) for c in pareto(complete)}
     for c in agg:
         c["pareto"] = int(id(c) in front_cfg)
     for r in rows:
@@ -139,10 +143,11 @@ def main():
     print(f"\nconfigurations over {len({r['phi'] for r in coarse})} solids fraction(s): rms and worst error, mean cost")
     print(f"{'cell/d_p':>8} {'alpha':>5} {'drag':>9} {'rms error %':>12} {'worst %':>8} {'core-s/s':>9}  pareto")
     for c in sorted(agg, key=lambda c: c["cost"]):
+        partial = "" if c["n"] == n_phi else f"  (run at {c['n']} of {n_phi} solids fractions: not compared)"
         print(f"{c['cell_over_dp']:8.2f} {c['alpha']:5.0f} {c['drag']:>9} {100 * c['error']:12.1f} {100 * c['worst']:8.1f} "
-              f"{c['cost']:9.3g}  {'*' if c['pareto'] else ''}")
+              f"{c['cost']:9.3g}  {'*' if c['pareto'] else ''}{partial}")
     for target in (0.05, 0.15):
-        ok = [c for c in agg if c["worst"] <= target]
+        ok = [c for c in complete if c["worst"] <= target]
         pick = min(ok, key=lambda c: c["cost"]) if ok else None
         print(f"cheapest configuration within {100 * target:.0f} % at every solids fraction: " +
               (f"cell {pick['cell_over_dp']:.3g} d_p, alpha {pick['alpha']:.0f}, {pick['drag']} ({pick['cost']:.3g} core-s/s)"
