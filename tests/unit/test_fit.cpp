@@ -220,15 +220,20 @@ cgd::fit::FilteredFile with_width_exponent(const SyntheticSpec& s, double n) {
 // interval holds the truth, and with n fitted the per-width residuals show no trend (|mean z| < 0.5, as in
 // CrossValidationAndResidualsAreHonest); h and a come back as in RecoversKnownMasterCurves, looser
 // (0.03, 10 %: n's error feeds into them).
+/// A fit of the synthetic data moved to H = h/(1 + a F^n_true) (noise 0.02), no cross-validation.
+FitResult fit_exponent_data(double n_true, bool fit_n, int bootstrap) {
+  SyntheticSpec s;
+  s.noise = 0.02;
+  FitOptions o;
+  o.bootstrap = bootstrap;
+  o.cross_validate = false;
+  o.fit_width_exponent = fit_n;
+  return cgd::fit::fit_filtered_drag({with_width_exponent(s, n_true)}, o, nullptr);
+}
+
 TEST(Fit, FitsTheWidthExponent) {
   for (const double n_true : {2.0, 1.0}) {
-    SyntheticSpec s;
-    s.noise = 0.02;
-    FitOptions o;
-    o.bootstrap = 0;
-    o.cross_validate = false;
-    o.fit_width_exponent = true;
-    const FitResult r = cgd::fit::fit_filtered_drag({with_width_exponent(s, n_true)}, o, nullptr);
+    const FitResult r = fit_exponent_data(n_true, true, 0);
     std::printf("[ fit width exponent ] truth %.1f: n = %.3f [%.3f, %.3f], chi2/dof %.2f\n", n_true,
                 r.width_exponent, r.width_exponent_low, r.width_exponent_high, r.exponent_chi2_per_dof);
     EXPECT_NEAR(r.width_exponent, n_true, 0.1);
@@ -251,12 +256,7 @@ TEST(Fit, FitsTheWidthExponent) {
   // most points (conditional on the fitted n, so below the ~90 % that BandsCoverTheTruthAtAboutTheNominalRate
   // measures with n known; measured 85 % here with 50 replicates; at least 80 %)
   {
-    SyntheticSpec s;
-    s.noise = 0.02;
-    FitOptions o;
-    o.bootstrap = 50;
-    o.fit_width_exponent = true;
-    const FitResult r = cgd::fit::fit_filtered_drag({with_width_exponent(s, 2.0)}, o, nullptr);
+    const FitResult r = fit_exponent_data(2.0, true, 50);
     const std::size_t nphi = r.band_phi.size();
     int inside = 0, total = 0;
     for (std::size_t j = 0; j < r.band_F.size(); ++j)
@@ -275,14 +275,7 @@ TEST(Fit, FitsTheWidthExponent) {
     EXPECT_GE(inside, 0.8 * total);
   }
   // the paper's fixed form on n = 2 data misfits: chi2/dof far above the fitted form's
-  SyntheticSpec s;
-  s.noise = 0.02;
-  FitOptions o;
-  o.bootstrap = 0;
-  o.cross_validate = false;
-  const FitResult fixed = cgd::fit::fit_filtered_drag({with_width_exponent(s, 2.0)}, o, nullptr);
-  o.fit_width_exponent = true;
-  const FitResult fitted = cgd::fit::fit_filtered_drag({with_width_exponent(s, 2.0)}, o, nullptr);
+  const FitResult fixed = fit_exponent_data(2.0, false, 0), fitted = fit_exponent_data(2.0, true, 0);
   EXPECT_GT(fixed.chi2_per_dof, 3 * fitted.chi2_per_dof);
 }
 
