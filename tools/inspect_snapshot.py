@@ -21,15 +21,8 @@ try:
     import h5py
     import numpy as np
 except ImportError as missing:
-    # `python3` on PATH may not be Debian's; its python3-h5py/python3-numpy live with /usr/bin/python3.
-    system_python = "/usr/bin/python3"
-    if os.path.realpath(sys.executable) != os.path.realpath(system_python) and os.path.exists(system_python) \
-            and not os.environ.get("CGD_INSPECT_REEXEC"):
-        os.environ["CGD_INSPECT_REEXEC"] = "1"
-        os.execv(system_python, [system_python, os.path.abspath(__file__)] + sys.argv[1:])
-    sys.stderr.write(f"inspect_snapshot.py: needs h5py and numpy ({missing}); "
-                     "apt-get install python3-h5py python3-numpy\n")
-    sys.exit(2)
+    from system_python import reexec_or_exit
+    reexec_or_exit(__file__, missing, ["python3-h5py", "python3-numpy"])
 
 # /params attributes shown by default (all of them with --all-params).
 KEY_PARAMS = [

@@ -36,15 +36,8 @@ try:
     import numpy as np
     import matplotlib  # noqa: F401 (drawn with in render_matplotlib)
 except ImportError as missing:
-    # `python3` on PATH may not be Debian's; its python3-h5py/python3-matplotlib live with /usr/bin/python3.
-    system_python = "/usr/bin/python3"
-    if os.path.realpath(sys.executable) != os.path.realpath(system_python) and os.path.exists(system_python) \
-            and not os.environ.get("CGD_RENDER_REEXEC"):
-        os.environ["CGD_RENDER_REEXEC"] = "1"
-        os.execv(system_python, [system_python, os.path.abspath(__file__)] + sys.argv[1:])
-    sys.stderr.write(f"render_snapshot.py: needs h5py, numpy and matplotlib ({missing}); "
-                     "apt-get install python3-h5py python3-numpy python3-matplotlib\n")
-    sys.exit(2)
+    from system_python import reexec_or_exit
+    reexec_or_exit(__file__, missing, ["python3-h5py", "python3-numpy", "python3-matplotlib"])
 
 COLOR_CHOICES = ("vy", "speed", "phi")
 
