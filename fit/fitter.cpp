@@ -567,13 +567,13 @@ FitResult fit_filtered_drag(const std::vector<FilteredFile>& files, const FitOpt
       if (raw < 0.0 || raw > o.h_max) ++R.h_clamped;
     }
   }
-  for (double F : R.band_F)
-    for (std::size_t i = 0; i < R.band_phi.size(); ++i) R.H.push_back(R.h[i] / (1.0 + R.a[i] * std::pow(F, n)));
+  std::vector<double> band_Fn;  // F^n of the data's widths
+  for (double F : R.band_F) band_Fn.push_back(std::pow(F, n));
+  for (double Fn : band_Fn)
+    for (std::size_t i = 0; i < R.band_phi.size(); ++i) R.H.push_back(R.h[i] / (1.0 + R.a[i] * Fn));
 
   // ---- step 3: bootstrap
   const std::size_t nphi = R.band_phi.size(), nF = R.band_F.size();
-  std::vector<double> band_Fn;
-  for (double F : R.band_F) band_Fn.push_back(std::pow(F, n));
   R.h_low = R.h_high = R.a_low = R.a_high = std::vector<double>(nphi, kNaN);
   R.H_low = R.H_high = std::vector<double>(nphi * nF, kNaN);
   const bool blocks =
