@@ -1,7 +1,7 @@
 #pragma once
 // Two-way coupling of the DEM and the fluid grid, once per fluid step (models.md, model A):
 //
-//   1. deposit   phi_c = sum_p V_p w_pc / V_cell (TSC, kernel.hpp); eps = 1 - phi_c, with a floor
+//   1. deposit   phi_c = sum_p V_p w_pc / V_cell (TSC, core/tsc_kernel.hpp); eps = 1 - phi_c, with a floor
 //                eps_min applied conservatively (the volume the floor adds is taken back, in
 //                proportion, from the cells above the floor, so sum eps is unchanged and the fluid's
 //                continuity stays exact);

@@ -12,7 +12,7 @@
 #include <initializer_list>
 #include <vector>
 
-#include "sim/coupling/kernel.hpp"
+#include "core/tsc_kernel.hpp"
 
 namespace cgd::coupling {
 

@@ -1,4 +1,4 @@
-// The TSC particle<->grid kernel (sim/coupling/kernel.hpp): partition of unity (conservation of
+// The TSC particle<->grid kernel (core/tsc_kernel.hpp): partition of unity (conservation of
 // deposited volume and force), continuity of the weights and of their slope when a particle crosses
 // a cell face or a cell centre (smooth void fraction), and uniform deposition from a uniform lattice.
 #include <gtest/gtest.h>
@@ -6,11 +6,11 @@
 #include <random>
 
 #include "sim/coupling/exchange.hpp"
-#include "sim/coupling/kernel.hpp"
+#include "core/tsc_kernel.hpp"
 
 namespace {
 
-using cgd::coupling::tsc_weights;
+using cgd::tsc_weights;
 
 TEST(CouplingKernel, WeightsArePartitionOfUnity) {
   std::mt19937_64 rng(3);

@@ -1,7 +1,8 @@
 #pragma once
-// Particle <-> grid kernel of the coupling: the triangular-shaped cloud (TSC), i.e. the quadratic
-// B-spline of width 3 cells in each direction (Hockney & Eastwood, "Computer Simulation Using
-// Particles", 1988, ch. 5). In cell units with cell centres at integer + 1/2, a particle at s has
+// Particle <-> grid kernel of the coupling (sim/coupling/exchange.hpp), also used by the filter's
+// coarse-grid operator, so that a-priori filtering applies exactly what a coarse run does: the
+// triangular-shaped cloud (TSC), i.e. the quadratic B-spline of width 3 cells in each direction
+// (Hockney & Eastwood, "Computer Simulation Using Particles", 1988, ch. 5). In cell units with cell centres at integer + 1/2, a particle at s has
 // its nearest centre c = floor(s) and offset d = s - (c + 1/2) in [-1/2, 1/2]; its weights on the
 // cells c-1, c, c+1 are
 //     w_-1 = (1/2 - d)^2 / 2,   w_0 = 3/4 - d^2,   w_+1 = (1/2 + d)^2 / 2,
@@ -16,7 +17,7 @@
 #include <array>
 #include <cmath>
 
-namespace cgd::coupling {
+namespace cgd {
 
 /// Weights of one axis: cells first, first+1, first+2 (global, unwrapped indices).
 struct AxisWeights {
@@ -37,4 +38,4 @@ inline AxisWeights tsc_weights(double x, double x0, double h) {
   return a;
 }
 
-}  // namespace cgd::coupling
+}  // namespace cgd
