@@ -104,13 +104,14 @@ Snapshot read_snapshot(const std::string& path, SnapshotContent content, MPI_Com
   s.pressure = f.read_double("/fluid/pressure");
   check_rows(path, "/fluid/void_fraction", s.void_fraction, n, 1);
   check_rows(path, "/fluid/pressure", s.pressure, n, 1);
+  s.cell_velocity = f.read_double("/fluid/velocity");
+  check_rows(path, "/fluid/velocity", s.cell_velocity, n, 3);
   if (f.exists("/fluid/eps_velocity")) {
     s.eps_velocity = f.read_double("/fluid/eps_velocity");
     check_rows(path, "/fluid/eps_velocity", s.eps_velocity, n, 3);
     s.eps_velocity_from_file = true;
   } else {
-    const std::vector<double> u = f.read_double("/fluid/velocity");
-    check_rows(path, "/fluid/velocity", u, n, 3);
+    const std::vector<double>& u = s.cell_velocity;
     s.eps_velocity.resize(u.size());
     for (std::int64_t c = 0; c < n; ++c)
       for (int d = 0; d < 3; ++d) s.eps_velocity[3 * c + d] = s.void_fraction[c] * u[3 * c + d];

@@ -43,6 +43,9 @@ struct Snapshot {
   PeriodicGrid grid;
   std::vector<double> void_fraction, pressure;                           // cells, file order
   std::vector<double> eps_velocity;                                      // cells x 3
+  /// Cell-centred u (/fluid/velocity: the mean of the two faces, what the coupler interpolates to the
+  /// particles), cells x 3.
+  std::vector<double> cell_velocity;
   /// True when eps_velocity was stored (face-consistent); false: formed here as eps_c u_c from the
   /// cell-centred velocity of an older snapshot (differs from the solver's face sum at O(h^2)).
   bool eps_velocity_from_file = false;

@@ -85,15 +85,19 @@ PeriodicBoxFilter::PeriodicBoxFilter(const PeriodicGrid& grid, const std::vector
       table_(grid, interleave(void_fraction, eps_velocity, pressure).data(), width_in_cells(grid, max_width_m)) {}
 
 FilteredPoint PeriodicBoxFilter::at(const double* position_m, double width_m) const {
+  return at(position_m, std::array<double, 3>{width_m, width_m, width_m});
+}
+
+FilteredPoint PeriodicBoxFilter::at(const double* position_m, const std::array<double, 3>& widths_m) const {
   std::array<AxisOperator, 3> op;
   for (int a = 0; a < 3; ++a)
-    op[a] = axis_operator(grid_.wrapped_cell_coordinate(position_m[a], a), width_m / grid_.spacing_m[a], grid_.cells[a]);
+    op[a] = axis_operator(grid_.wrapped_cell_coordinate(position_m[a], a), widths_m[a] / grid_.spacing_m[a], grid_.cells[a]);
   const int ix[4] = {op[0].lo, op[0].lo + 1, op[0].hi, op[0].hi + 1};
   const int iy[4] = {op[1].lo, op[1].lo + 1, op[1].hi, op[1].hi + 1};
   const int iz[4] = {op[2].lo, op[2].lo + 1, op[2].hi, op[2].hi + 1};
   const auto &vx = op[0].value, &vy = op[1].value, &vz = op[2].value;
   const auto &sx = op[0].slope, &sy = op[1].slope, &sz = op[2].slope;
-  double flow[4] = {0, 0, 0, 0}, slope[3] = {0, 0, 0};
+  double flow[5] = {0, 0, 0, 0, 0}, slope[3] = {0, 0, 0};
   for (int r = 0; r < 4; ++r)
     for (int q = 0; q < 4; ++q) {
       const double vyz = vy[q] * vz[r], syz = sy[q] * vz[r], ysz = vy[q] * sz[r];
@@ -105,6 +109,7 @@ FilteredPoint PeriodicBoxFilter::at(const double* position_m, double width_m) co
         flow[1] += w * t[1];
         flow[2] += w * t[2];
         flow[3] += w * t[3];
+        flow[4] += w * t[4];
         slope[0] += sx[p] * vyz * t[4];
         slope[1] += vx[p] * syz * t[4];
         slope[2] += vx[p] * ysz * t[4];
@@ -114,11 +119,12 @@ FilteredPoint PeriodicBoxFilter::at(const double* position_m, double width_m) co
   const double volume_cells = (op[0].hi - op[0].lo + vx[1] + vx[3]) * (op[1].hi - op[1].lo + vy[1] + vy[3]) *
                               (op[2].hi - op[2].lo + vz[1] + vz[3]);
   const auto& mean = table_.mean();
-  for (int c = 0; c < 4; ++c) flow[c] += mean[c] * volume_cells;
+  for (int c = 0; c < 5; ++c) flow[c] += mean[c] * volume_cells;
   FilteredPoint f;
   f.void_fraction = flow[0] / volume_cells;
   for (int d = 0; d < 3; ++d) f.velocity[d] = flow[1 + d] / flow[0];
   for (int a = 0; a < 3; ++a) f.grad_p[a] = slope[a] / (volume_cells * grid_.spacing_m[a]);
+  f.pressure = flow[4] / volume_cells;
   return f;
 }
 
@@ -127,6 +133,7 @@ FilteredPoint PeriodicBoxFilter::domain_average() const {
   const auto& mean = table_.mean();
   f.void_fraction = mean[0];
   for (int d = 0; d < 3; ++d) f.velocity[d] = mean[1 + d] / mean[0];
+  f.pressure = mean[4];
   return f;
 }
 

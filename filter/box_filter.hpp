@@ -71,6 +71,7 @@ struct FilteredPoint {
   double void_fraction = 0;            // filter(eps)
   std::array<double, 3> velocity{};    // Favre: filter(eps u) / filter(eps), m/s
   std::array<double, 3> grad_p{};      // gradient of filter(p), Pa/m
+  double pressure = 0;                 // filter(p), Pa (the box average of the pressure)
 };
 
 /// The periodic box filter of a snapshot's fluid fields (eps, eps u, p), for boxes of edge up to
@@ -81,6 +82,10 @@ class PeriodicBoxFilter {
                     const std::vector<double>& eps_velocity, const std::vector<double>& pressure, double max_width_m);
   /// The box of edge `width_m` centred at `position_m` (any position: it is wrapped).
   FilteredPoint at(const double* position_m, double width_m) const;
+  /// A box of edges `widths_m` (x, y, z; each at most the constructor's max_width_m) centred at
+  /// `position_m`: e.g. a coarse grid's cell (the filter's coarse-grid operator restricts the fields
+  /// onto coarse cells with it; docs/filter.md).
+  FilteredPoint at(const double* position_m, const std::array<double, 3>& widths_m) const;
   /// The whole-box average: <eps>, <eps u>/<eps>, zero gradient.
   FilteredPoint domain_average() const;
   std::size_t bytes() const { return table_.bytes(); }

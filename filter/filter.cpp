@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
+#include <functional>
+#include <numbers>
 #include <queue>
 #include <sstream>
 
@@ -10,6 +12,7 @@
 #include "core/error.hpp"
 #include "core/scene.hpp"
 #include "core/timers.hpp"
+#include "core/tsc_grid.hpp"
 #include "filter/box_filter.hpp"
 
 namespace cgd::filter {
@@ -63,6 +66,73 @@ std::size_t FilterPlan::snapshot_count() const {
   std::size_t n = 0;
   for (const RunPlan& r : runs) n += r.files.size();
   return n;
+}
+
+CoarseGrid coarse_grid_of_scene(const std::string& scene_toml, const std::string& origin, int cells_across) {
+  if (cells_across < 1)
+    throw InputError("--grids: " + std::to_string(cells_across) + " cells across is not allowed (an integer >= 1)");
+  Scene first;
+  try {
+    first = load_scene_from_string(scene_toml, origin);
+  } catch (const std::exception& e) {
+    throw InputError("--grids: the scene of " + origin + " cannot be loaded by this build, so the coarse grid a coarse "
+                     "run would build is unknown: " + e.what());
+  }
+  const double d = first.particles.diameter_m;
+  const double dx_over_dp = first.domain.size_m[0] / (cells_across * d);
+  std::ostringstream set;
+  set.precision(17);
+  set << "fluid.dx_over_dp=" << dx_over_dp;
+  Scene scene;
+  try {
+    scene = load_scene_from_string(scene_toml, origin, {set.str()});
+  } catch (const std::exception& e) {
+    throw InputError("--grids: " + std::to_string(cells_across) + " cells across (fluid.dx_over_dp = " + fmt(dx_over_dp) +
+                     ") is refused by the scene of " + origin + ": " + e.what());
+  }
+  if (!scene.fluid) throw InputError("--grids: the scene of " + origin + " has no [fluid] section");
+  CoarseGrid c;
+  c.cells_across = cells_across;
+  c.dx_over_dp = dx_over_dp;
+  for (int a = 0; a < 3; ++a) {
+    c.grid.cells[a] = scene.fluid->cells[a];
+    c.grid.spacing_m[a] = scene.domain.size_m[a] / scene.fluid->cells[a];  // sim/fluid/grid.cpp: h = box / cells
+    c.grid.origin_m[a] = 0.0;                                              // the engine's grids start at 0
+  }
+  c.void_fraction_floor = scene.numerics.void_fraction_floor;
+  return c;
+}
+
+std::vector<double> coarse_grid_fields(const Snapshot& s, const CoarseGrid& coarse, double particle_volume_m3) {
+  const PeriodicGrid& G = coarse.grid;
+  // 1. the coarse run's solids fraction: the TSC deposit of the particles' volume, with the floor
+  std::vector<double> phi = tsc_deposit_solids_fraction(G, s.position, {particle_volume_m3});
+  apply_void_fraction_floor(phi, coarse.void_fraction_floor);
+  // 2. the fluid restricted to the coarse cells: exact box averages over each cell of eps, eps u_c, p
+  const std::size_t n_fine = s.grid.cell_count();
+  std::vector<double> eps_uc(3 * n_fine);
+  for (std::size_t c = 0; c < n_fine; ++c)
+    for (int d = 0; d < 3; ++d) eps_uc[3 * c + d] = s.void_fraction[c] * s.cell_velocity[3 * c + d];
+  const double widest = std::max({G.spacing_m[0], G.spacing_m[1], G.spacing_m[2]});
+  const PeriodicBoxFilter fine(s.grid, s.void_fraction, eps_uc, s.pressure, widest);
+  const std::size_t n = G.cell_count();
+  std::vector<double> p(n), out(7 * n);
+  for (int k = 0; k < G.cells[2]; ++k)
+    for (int j = 0; j < G.cells[1]; ++j)
+      for (int i = 0; i < G.cells[0]; ++i) {
+        const std::size_t c = G.index(i, j, k);
+        const double centre[3] = {G.origin_m[0] + (i + 0.5) * G.spacing_m[0], G.origin_m[1] + (j + 0.5) * G.spacing_m[1],
+                                  G.origin_m[2] + (k + 0.5) * G.spacing_m[2]};
+        const FilteredPoint f = fine.at(centre, G.spacing_m);
+        out[7 * c] = phi[c];
+        for (int d = 0; d < 3; ++d) out[7 * c + 1 + d] = f.velocity[d];  // Favre: box(eps u_c) / box(eps)
+        p[c] = f.pressure;
+      }
+  // 3. the coarse run's cell-centred pressure gradient (central differences, as the coupler)
+  const std::vector<double> grad = central_pressure_gradient(G, p);
+  for (std::size_t c = 0; c < n; ++c)
+    for (int d = 0; d < 3; ++d) out[7 * c + 4 + d] = grad[3 * c + d];
+  return out;
 }
 
 std::vector<double> default_widths_m(const PeriodicGrid& grid, double shortest_edge_m) {
@@ -159,6 +229,34 @@ FilterPlan plan_filter(const FilterOptions& o) {
     std::sort(plan.widths_m.begin(), plan.widths_m.end());
     plan.widths_m.erase(std::unique(plan.widths_m.begin(), plan.widths_m.end()), plan.widths_m.end());
   }
+  // coarse grids: each run's own (a coarse run of that run's box), all runs the same cell
+  {
+    std::vector<int> grids = o.grids_cells_across;
+    std::sort(grids.begin(), grids.end(), std::greater<int>());  // ascending cell size
+    grids.erase(std::unique(grids.begin(), grids.end()), grids.end());
+    plan.grids = grids;
+    for (RunPlan& r : plan.runs)
+      for (int n : grids) {
+        CoarseGrid c = coarse_grid_of_scene(r.physics.scene_toml, r.path, n);
+        for (int a = 0; a < 3; ++a)
+          if (c.grid.spacing_m[a] < r.grid.spacing_m[a] * (1.0 - 1e-9))
+            throw InputError("--grids: " + std::to_string(n) + " cells across gives " + std::to_string(c.grid.cells[a]) +
+                             " cells of " + fmt(c.grid.spacing_m[a] / d) + " d_p along " + "xyz"[a] + " for " + r.path +
+                             ", finer than the run's own " + fmt(r.grid.spacing_m[a] / d) +
+                             " d_p: a coarse grid has at most the resolved grid's " + std::to_string(r.grid.cells[0]) +
+                             " cells across");
+        if (&r != &plan.runs.front()) {
+          const CoarseGrid& f0 = plan.runs.front().coarse[r.coarse.size()];
+          for (int a = 0; a < 3; ++a)
+            if (std::abs(c.grid.spacing_m[a] - f0.grid.spacing_m[a]) > 1e-9 * f0.grid.spacing_m[a])
+              throw InputError("--grids: " + std::to_string(n) + " cells across gives cells of " +
+                               fmt(f0.grid.spacing_m[a] / d) + " d_p along " + "xyz"[a] + " in " +
+                               plan.runs.front().path + " but " + fmt(c.grid.spacing_m[a] / d) + " d_p in " + r.path +
+                               " (pooled runs need boxes that give the same coarse cell)");
+        }
+        r.coarse.push_back(c);
+      }
+  }
   plan.whole_box_width_m = std::cbrt(r0.physics.box_size_m[0] * r0.physics.box_size_m[1] * r0.physics.box_size_m[2]);
   const int n_bins = static_cast<int>(std::llround(o.bin_max / o.bin_width));
   for (int b = 0; b <= n_bins; ++b) plan.bin_edges.push_back(b * o.bin_width);
@@ -171,8 +269,11 @@ SnapshotResult filter_snapshot(const Snapshot& s, const FilterPlan& plan, const 
   if (s.drag_coefficient.empty() || !s.has_fluid)
     throw InputError(s.path + ": the snapshot lacks the coupling fields (/particles/drag_coefficient, /fluid); "
                               "the filter needs a coupled run's snapshot");
+  if (!plan.grids.empty() && s.cell_velocity.size() != 3 * s.grid.cell_count())
+    throw InputError(s.path + ": the snapshot lacks /fluid/velocity (the cell-centred u the coarse-grid operator restricts)");
   const double t0 = wall_seconds();
-  const std::size_t n_widths = plan.widths_m.size() + 1;  // + whole box
+  const std::size_t n_widths = plan.columns();  // widths, whole box, grids
+  const std::size_t whole_col = plan.whole_box_column();
   const std::size_t n_bins = plan.bin_edges.size() - 1;
   const double bin_width = plan.bin_edges[1] - plan.bin_edges[0];
   SnapshotResult out;
@@ -180,7 +281,12 @@ SnapshotResult filter_snapshot(const Snapshot& s, const FilterPlan& plan, const 
   out.out_of_range.assign(n_widths, 0);
   out.samples.assign(n_widths, {});
   out.particles = s.count;
-  const PeriodicBoxFilter box(s.grid, s.void_fraction, s.eps_velocity, s.pressure, plan.widths_m.back());
+  const PeriodicBoxFilter box(s.grid, s.void_fraction, s.eps_velocity, s.pressure,
+                              plan.widths_m.empty() ? s.grid.cell_size_m() : plan.widths_m.back());
+  // the coarse grids' fields (phi, u, grad p per coarse cell), interpolated to the particles below
+  std::vector<std::vector<double>> coarse(plan.grids.size());
+  const double particle_volume = std::numbers::pi / 6.0 * std::pow(run.physics.diameter_m * run.physics.parcel_size, 3);
+  for (std::size_t g = 0; g < plan.grids.size(); ++g) coarse[g] = coarse_grid_fields(s, run.coarse[g], particle_volume);
   const FilteredPoint whole = box.domain_average();
   const bool pressure_terms = run.physics.pressure_gradient_force;
   // max-heaps of the smallest keys per width: the random subsample
@@ -205,8 +311,17 @@ SnapshotResult filter_snapshot(const Snapshot& s, const FilterPlan& plan, const 
       const double* u = &s.fluid_velocity[3 * i];
       const double resolved = s.drag_coefficient[i] * (u[1] - v[1]) - (pressure_terms ? s.pressure_gradient[3 * i + 1] : 0.0);
       for (std::size_t w = 0; w < n_widths; ++w) {
-        const bool is_whole = w + 1 == n_widths;
-        const FilteredPoint f = is_whole ? whole : box.at(x, plan.widths_m[w]);
+        FilteredPoint f;
+        if (w < whole_col) {
+          f = box.at(x, plan.widths_m[w]);
+        } else if (w == whole_col) {
+          f = whole;
+        } else {  // a coarse grid: TSC interpolation of its cell fields, as Coupler::compute_drag
+          const std::size_t g = w - whole_col - 1;
+          const std::array<double, 7> c = tsc_interpolate<7>(run.coarse[g].grid, coarse[g].data(), x);
+          f.void_fraction = 1.0 - c[0];
+          for (int d = 0; d < 3; ++d) f.velocity[d] = c[1 + d], f.grad_p[d] = c[4 + d];
+        }
         const double phi = 1.0 - f.void_fraction;
         const double slip[3] = {f.velocity[0] - v[0], f.velocity[1] - v[1], f.velocity[2] - v[2]};
         const double speed = std::sqrt(slip[0] * slip[0] + slip[1] * slip[1] + slip[2] * slip[2]);

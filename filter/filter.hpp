@@ -29,6 +29,7 @@ namespace cgd::filter {
 struct FilterOptions {
   std::vector<std::string> run_dirs;
   std::vector<double> widths_over_dp;          // empty: the default list (default_widths)
+  std::vector<int> grids_cells_across;         // --grids: coarse grids, cells across the box's x edge
   double bin_width = 0.01;                     // phi_bar bins
   double bin_max = 0.65;                       // bins cover [0, bin_max)
   std::optional<double> from_time_s, from_tref;  // drop snapshots before this time
@@ -40,6 +41,16 @@ struct FilterOptions {
   bool quiet = false;
 };
 
+/// A coarse grid of the coarse-grid operator (docs/filter.md "The coarse grid's operator"): the grid a
+/// coarse run of `cells_across` cells along x builds for the run's box (fluid.dx_over_dp =
+/// box_x / (cells_across d_p), the cell counts by the scene's own rule, spacing box / cells).
+struct CoarseGrid {
+  int cells_across = 0;
+  double dx_over_dp = 0;                       // the fluid.dx_over_dp a coarse run is given
+  PeriodicGrid grid;
+  double void_fraction_floor = 0.3;            // numerics.void_fraction_floor of the run's scene
+};
+
 /// One run directory as the filter uses it.
 struct RunPlan {
   std::string path;
@@ -49,17 +60,34 @@ struct RunPlan {
   std::vector<std::int64_t> steps;
   RunPhysics physics;
   PeriodicGrid grid;
+  std::vector<CoarseGrid> coarse;              // one per FilterPlan::grids entry
 };
 
 /// What will be done: the runs, the widths (m; the whole box is separate), the bins.
 struct FilterPlan {
   std::vector<RunPlan> runs;
   std::vector<double> widths_m;
+  std::vector<int> grids;                      // coarse grids (cells across x), ascending cell size
   double whole_box_width_m = 0;                // cube root of the (first run's) box volume
   std::vector<double> bin_edges;
   std::vector<std::string> warnings;
   std::size_t snapshot_count() const;
+  /// Result columns: the widths, the whole box (index widths_m.size()), then the grids.
+  std::size_t columns() const { return widths_m.size() + 1 + grids.size(); }
+  std::size_t whole_box_column() const { return widths_m.size(); }
 };
+
+/// The coarse grid a coarse run with `cells_across` cells along x builds for the scene `scene_toml`:
+/// the scene loaded with fluid.dx_over_dp = box_x / (cells_across d_p) (core/scene.cpp's rule for the
+/// cell counts, the same call cgd-coarse makes), spacing = box edge / cells (sim/fluid/grid.cpp).
+/// InputError naming `origin` when the scene cannot be loaded with it.
+CoarseGrid coarse_grid_of_scene(const std::string& scene_toml, const std::string& origin, int cells_across);
+
+/// The coarse-grid operator's fields on the coarse cells of one snapshot, interleaved 7 per cell:
+/// phi (TSC deposit of the particles' volume, conservative floor), Favre velocity u (3: box average
+/// of eps u_c over the cell / box average of eps), central-difference gradient of the cell-averaged
+/// pressure (3). `fine` is the box filter of (eps, eps u_c, p) of the snapshot.
+std::vector<double> coarse_grid_fields(const Snapshot& snapshot, const CoarseGrid& coarse, double particle_volume_m3);
 
 /// Default widths: the multiples k of the cell size h (cube root of the cell volume) with
 /// 3 k h <= the shortest box edge of every run.
@@ -83,8 +111,9 @@ struct Sample {
   double slip[3] = {0, 0, 0}, grad_p_filtered[3] = {0, 0, 0};
 };
 
-/// The filtered sums of one snapshot: sums[w * n_bins + b] for the widths (w < widths.size()) and the
-/// whole box (w = widths.size()); particles with phi_bar outside the bins in out_of_range[w].
+/// The filtered sums of one snapshot: sums[w * n_bins + b] for the widths (w < widths.size()), the
+/// whole box (w = widths.size()) and the coarse grids (after it); particles with phi_bar outside the
+/// bins in out_of_range[w].
 struct SnapshotResult {
   std::vector<BinSums> sums;
   std::vector<std::int64_t> out_of_range;

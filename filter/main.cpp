@@ -3,6 +3,7 @@
 #include <mpi.h>
 
 #include <CLI/CLI.hpp>
+#include <cmath>
 #include <sstream>
 
 #include "core/cli.hpp"
@@ -40,6 +41,11 @@ int main(int argc, char** argv) {
     app.add_option("-o,--output", o.output_path, "filtered file to write (HDF5, cgd_format = filtered)")->required();
     app.add_option("--widths", widths, "filter widths in particle diameters, comma-separated (default: multiples of the cell "
                                        "that fit three times into the shortest box edge; the whole box is always added)");
+    std::string grids;
+    app.add_option("--grids", grids,
+                   "coarse grids, given as cells across the box's x edge (a coarse run's fluid.dx_over_dp = box_x_dp / N), "
+                   "comma-separated: the filtered drag correction H_grid of the coarse grid's own operator (TSC deposit "
+                   "and interpolation, docs/filter.md) beside the box widths");
     app.add_option("--bins", bins, "phi_bar bins: WIDTH or WIDTH,MAX (default 0.01,0.65: [0, 0.65) in steps of 0.01)");
     app.add_option("--from-time", from_time, "drop snapshots before this time (s)");
     app.add_option("--from-tref", from_tref, "drop snapshots before this time (units of t_ref = u_t/g)");
@@ -50,6 +56,12 @@ int main(int argc, char** argv) {
     app.add_flag("--quiet", o.quiet, "no progress output");
     cgd::parse_command_line(app, argc, argv, "cgd-filter");
     if (!widths.empty()) o.widths_over_dp = parse_list(widths, "--widths");
+    if (!grids.empty())
+      for (double g : parse_list(grids, "--grids")) {
+        if (!(g >= 1 && g <= 1e6 && g == std::floor(g)))
+          throw cgd::InputError("--grids: " + std::to_string(g) + " is not allowed (whole numbers of cells across, >= 1)");
+        o.grids_cells_across.push_back(static_cast<int>(g));
+      }
     if (!bins.empty()) {
       const std::vector<double> b = parse_list(bins, "--bins");
       if (b.size() > 2) throw cgd::InputError("--bins: give WIDTH or WIDTH,MAX, not " + bins);

@@ -2,9 +2,11 @@
 // bootstrap and the filtered file (docs/schema-filtered.md) written atomically by rank 0.
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <cstring>
 #include <filesystem>
 #include <iostream>
+#include <limits>
 #include <random>
 #include <sstream>
 
@@ -71,7 +73,8 @@ struct Statistics {
 };
 
 Statistics compute_statistics(const FilterPlan& plan, const FilterOptions& o, const std::vector<double>& sums) {
-  const std::size_t n_widths = plan.widths_m.size() + 1, n_bins = plan.bin_edges.size() - 1;
+  const std::size_t n_widths = plan.columns(), n_bins = plan.bin_edges.size() - 1;
+  const std::size_t whole_col = plan.whole_box_column();
   const std::size_t per_row = n_widths * n_bins * kSumFields;
   const std::size_t rows = sums.size() / per_row;
   auto at = [&](std::size_t row, std::size_t w, std::size_t b, int field) {
@@ -87,8 +90,8 @@ Statistics compute_statistics(const FilterPlan& plan, const FilterOptions& o, co
     for (std::size_t k = 0; k < n; ++k) {
       double c = 0, s = 0;
       for (std::size_t b = 0; b < n_bins; ++b) {
-        c += at(row + k, n_widths - 1, b, 0);
-        s += at(row + k, n_widths - 1, b, 3);
+        c += at(row + k, whole_col, b, 0);
+        s += at(row + k, whole_col, b, 3);
       }
       series.push_back(c > 0 ? s / c : 0.0);
     }
@@ -187,11 +190,72 @@ Statistics compute_statistics(const FilterPlan& plan, const FilterOptions& o, co
   return st;
 }
 
+/// The box width whose H matches a coarse grid's H_grid (docs/filter.md "Equivalent width").
+struct EquivalentWidth {
+  double width_m = NAN, rms = NAN;
+  int bins = 0;
+  bool at_bound = false;  // the best width is the narrowest or widest box filtered: a bound, not a match
+};
+constexpr const char* kEquivalentWidthMethod =
+    "the box width Delta minimising sum_b (H_box(Delta, b) - H_grid(b))^2 / (se_grid(b)^2 + se_box(Delta, b)^2) over the "
+    "bins with >= 100 samples at the grid and at every box width up to 4 grid cells, H_box(Delta, b) and se_box "
+    "linear in Delta between those widths (pooled H of the runs; se = bootstrap standard deviation), Delta scanned on "
+    "2001 points between the narrowest and the widest of them";
+
+std::vector<EquivalentWidth> equivalent_widths(const FilterPlan& plan, const Statistics& st) {
+  const std::size_t n_bins = plan.bin_edges.size() - 1, W_all = plan.widths_m.size(), whole = plan.whole_box_column();
+  std::vector<EquivalentWidth> out(plan.grids.size());
+  if (W_all < 2) return out;
+  for (std::size_t g = 0; g < plan.grids.size(); ++g) {
+    const std::size_t col = whole + 1 + g;
+    // the widths up to 4 grid cells (sqrt(6) = 2.45 cells lies well inside): wider boxes hold fewer bins
+    const double cell = plan.runs.front().coarse[g].grid.cell_size_m();
+    std::size_t W = 0;
+    while (W < W_all && (W < 2 || plan.widths_m[W] <= 4.0 * cell * (1 + 1e-9))) ++W;
+    std::vector<std::size_t> bins;
+    for (std::size_t b = 0; b < n_bins; ++b) {
+      bool ok = st.count[col * n_bins + b] >= 100 && std::isfinite(st.H[col * n_bins + b]) &&
+                std::isfinite(st.H_stderr[col * n_bins + b]);
+      for (std::size_t w = 0; w < W && ok; ++w)
+        ok = st.count[w * n_bins + b] >= 100 && std::isfinite(st.H[w * n_bins + b]) && std::isfinite(st.H_stderr[w * n_bins + b]);
+      if (ok) bins.push_back(b);
+    }
+    EquivalentWidth& e = out[g];
+    e.bins = static_cast<int>(bins.size());
+    if (bins.empty()) continue;
+    const double lo = plan.widths_m.front(), hi = plan.widths_m[W - 1];
+    double best = std::numeric_limits<double>::infinity();
+    int best_k = 0;
+    const int steps = 2000;
+    for (int k = 0; k <= steps; ++k) {
+      const double delta = lo + (hi - lo) * k / steps;
+      std::size_t w = 0;
+      while (w + 2 < W && plan.widths_m[w + 1] < delta) ++w;
+      const double t = std::clamp((delta - plan.widths_m[w]) / (plan.widths_m[w + 1] - plan.widths_m[w]), 0.0, 1.0);
+      double chi2 = 0, sq = 0;
+      for (std::size_t b : bins) {
+        const double H0 = st.H[w * n_bins + b], H1 = st.H[(w + 1) * n_bins + b];
+        const double s0 = st.H_stderr[w * n_bins + b], s1 = st.H_stderr[(w + 1) * n_bins + b];
+        const double Hb = (1 - t) * H0 + t * H1, sb = (1 - t) * s0 + t * s1;
+        const double r = Hb - st.H[col * n_bins + b], sg = st.H_stderr[col * n_bins + b];
+        chi2 += r * r / std::max(sg * sg + sb * sb, 1e-30);
+        sq += r * r;
+      }
+      if (chi2 < best) best = chi2, best_k = k, e.rms = std::sqrt(sq / static_cast<double>(bins.size()));
+    }
+    e.width_m = lo + (hi - lo) * best_k / steps;
+    e.at_bound = best_k == 0 || best_k == steps;
+  }
+  return out;
+}
+
 void write_filtered_file(const FilterPlan& plan, const FilterOptions& o, const std::vector<double>& sums,
                          const std::vector<std::int64_t>& out_of_range, const std::vector<std::vector<Sample>>& samples,
-                         const Statistics& st, const std::vector<std::string>& checksums) {
+                         const Statistics& st, const std::vector<std::string>& checksums,
+                         const std::vector<EquivalentWidth>& equivalent) {
   const RunPlan& r0 = plan.runs.front();
-  const std::size_t n_widths = plan.widths_m.size() + 1, n_bins = plan.bin_edges.size() - 1;
+  const std::size_t n_widths = plan.columns(), n_bins = plan.bin_edges.size() - 1;
+  const std::size_t whole_col = plan.whole_box_column();
   const std::size_t rows = plan.snapshot_count();
   const std::size_t per_row = n_widths * n_bins * kSumFields;
   const std::uint64_t nb = n_bins;
@@ -282,17 +346,51 @@ void write_filtered_file(const FilterPlan& plan, const FilterOptions& o, const s
     std::vector<double> centre(n_bins);
     for (std::size_t b = 0; b < n_bins; ++b) centre[b] = 0.5 * (plan.bin_edges[b] + plan.bin_edges[b + 1]);
     // widths
+    if (!plan.grids.empty()) {
+      f.create_group("/grids");
+      std::vector<std::int64_t> across(plan.grids.begin(), plan.grids.end());
+      f.set_attr("/grids", "cells_across", across);
+      f.set_attr("/grids", "operator", std::string("tsc-deposit-interpolate"));
+      f.set_attr("/grids", "definition",
+                 std::string("per coarse grid (the grid a coarse run with cells_across cells along x builds): phi = TSC "
+                             "deposit of the particles' volume on the coarse cells with the coupler's conservative floor; "
+                             "u = box average over the coarse cell of eps u_c / box average of eps (Favre; u_c the "
+                             "resolved cell-centred velocity); p = box average over the cell; grad p = central "
+                             "differences of the cell values; phi, u, grad p TSC-interpolated to each particle"));
+    }
     for (std::size_t w = 0; w < n_widths; ++w) {
-      const bool whole = w + 1 == n_widths;
-      const std::string g = whole ? "/whole_box" : "/width_" + std::to_string(w);
-      const double width = whole ? plan.whole_box_width_m : plan.widths_m[w];
+      const bool whole = w == whole_col, grid = w > whole_col;
+      const std::size_t gi = grid ? w - whole_col - 1 : 0;
+      const std::string g = whole ? "/whole_box" : grid ? "/grids/" + std::to_string(plan.grids[gi]) : "/width_" + std::to_string(w);
+      const double width = whole ? plan.whole_box_width_m : grid ? r0.coarse[gi].grid.cell_size_m() : plan.widths_m[w];
       f.create_group(g);
-      f.set_attr(g, "kind", std::string(whole ? "whole_box" : "box"));
+      f.set_attr(g, "kind", std::string(whole ? "whole_box" : grid ? "grid" : "box"));
       f.set_attr(g, "width_m", width);
       f.set_attr(g, "width_over_dp", width / p.diameter_m);
       f.set_attr(g, "width_over_cell", width / r0.grid.cell_size_m());
       f.set_attr(g, "F", p.l_char_m / width);
       f.set_attr(g, "out_of_range", out_of_range[w]);
+      if (grid) {
+        const CoarseGrid& c = r0.coarse[gi];
+        f.set_attr(g, "cells_across", static_cast<std::int64_t>(c.cells_across));
+        f.set_attr(g, "cells", std::vector<std::int64_t>(c.grid.cells.begin(), c.grid.cells.end()));
+        f.set_attr(g, "dx_over_dp", c.dx_over_dp);
+        f.set_attr(g, "cell_spacing_m", std::vector<double>(c.grid.spacing_m.begin(), c.grid.spacing_m.end()));
+        f.set_attr(g, "cell_size_m", c.grid.cell_size_m());
+        f.set_attr(g, "cell_size_over_dp", c.grid.cell_size_m() / p.diameter_m);
+        f.set_attr(g, "kernel", std::string("tsc"));
+        f.set_attr(g, "operator", std::string("tsc-deposit-interpolate"));
+        f.set_attr(g, "void_fraction_floor", c.void_fraction_floor);
+        const EquivalentWidth& e = equivalent[gi];
+        f.set_attr(g, "equivalent_width_m", e.width_m);
+        f.set_attr(g, "equivalent_width_over_dp", e.width_m / p.diameter_m);
+        f.set_attr(g, "equivalent_width_over_grid_cell", e.width_m / c.grid.cell_size_m());
+        f.set_attr(g, "equivalent_width_bins", static_cast<std::int64_t>(e.bins));
+        f.set_attr(g, "equivalent_width_at_bound", static_cast<std::int64_t>(e.at_bound ? 1 : 0));
+        f.set_attr(g, "equivalent_width_rms", e.rms);
+        f.set_attr(g, "equivalent_width_analytic_over_grid_cell", std::sqrt(6.0));
+        f.set_attr(g, "equivalent_width_method", std::string(kEquivalentWidthMethod));
+      }
       auto slice = [&](const std::vector<double>& v) {
         return std::vector<double>(v.begin() + static_cast<std::ptrdiff_t>(w * n_bins),
                                    v.begin() + static_cast<std::ptrdiff_t>((w + 1) * n_bins));
@@ -371,7 +469,8 @@ std::size_t run_filter(const FilterOptions& o, MPI_Comm comm) {
   const double t_start = wall_seconds();
   FilterPlan plan;
   on_all_ranks(comm, [&] { plan = plan_filter(o); });
-  const std::size_t n_widths = plan.widths_m.size() + 1, n_bins = plan.bin_edges.size() - 1;
+  const std::size_t n_widths = plan.columns(), n_bins = plan.bin_edges.size() - 1;
+  const std::size_t whole_col = plan.whole_box_column();
   const std::size_t rows = plan.snapshot_count();
   const double d = plan.runs.front().physics.diameter_m;
   if (rank == 0 && !o.quiet) {
@@ -405,7 +504,7 @@ std::size_t run_filter(const FilterOptions& o, MPI_Comm comm) {
         read_s += wall_seconds() - t0;
         SnapshotResult res = filter_snapshot(snap, plan, o, static_cast<std::int64_t>(k), r);
         filter_s += res.seconds;
-        particle_widths += res.particles * static_cast<std::int64_t>(n_widths - 1);
+        particle_widths += res.particles * static_cast<std::int64_t>(n_widths - 1);  // grids counted as widths
         for (std::size_t c = 0; c < n_widths * n_bins; ++c) {
           double* s = &sums[k * per_row + c * kSumFields];
           s[0] = res.sums[c].count;
@@ -479,7 +578,8 @@ std::size_t run_filter(const FilterOptions& o, MPI_Comm comm) {
       try {
         const double t0 = wall_seconds();
         const Statistics st = compute_statistics(plan, o, sums);
-        write_filtered_file(plan, o, sums, out_of_range, samples, st, checksums);
+        const std::vector<EquivalentWidth> equivalent = equivalent_widths(plan, st);
+        write_filtered_file(plan, o, sums, out_of_range, samples, st, checksums, equivalent);
         if (!o.quiet) {
           const RunPhysics& p = plan.runs.front().physics;
           std::cerr << "cgd-filter: wrote " << o.output_path << " in " << wall_seconds() - t_start << " s (reading "
@@ -493,12 +593,36 @@ std::size_t run_filter(const FilterOptions& o, MPI_Comm comm) {
           // the whole box: the domain slip
           double c = 0, s = 0;
           for (std::size_t b = 0; b < n_bins; ++b) {
-            c += st.count[(n_widths - 1) * n_bins + b] > 0 ? st.count[(n_widths - 1) * n_bins + b] : 0;
-            s += st.count[(n_widths - 1) * n_bins + b] > 0
-                     ? st.slip[(n_widths - 1) * n_bins + b] * st.count[(n_widths - 1) * n_bins + b]
+            c += st.count[whole_col * n_bins + b] > 0 ? st.count[whole_col * n_bins + b] : 0;
+            s += st.count[whole_col * n_bins + b] > 0
+                     ? st.slip[whole_col * n_bins + b] * st.count[whole_col * n_bins + b]
                      : 0;
           }
           std::cerr << "  whole box: mean slip " << (c > 0 ? s / c / p.u_t_m_s : 0.0) << " u_t\n";
+          // the coarse grids: equivalent box widths and H_grid per bin (a report on stdout)
+          for (std::size_t g = 0; g < plan.grids.size(); ++g) {
+            const CoarseGrid& cg = plan.runs.front().coarse[g];
+            const double h = cg.grid.cell_size_m();
+            const EquivalentWidth& e = equivalent[g];
+            std::cout << "grid " << plan.grids[g] << " across (" << cg.grid.cells[0] << " x " << cg.grid.cells[1] << " x "
+                      << cg.grid.cells[2] << " cells of " << h / p.diameter_m << " d_p): equivalent box width ";
+            if (e.bins > 0)
+              std::cout << (e.at_bound ? "(at the end of the widths filtered) " : "") << e.width_m / p.diameter_m
+                        << " d_p = " << e.width_m / h << " grid cells (TSC deposit+interpolate analytic sqrt(6) = "
+                        << std::sqrt(6.0) << "), " << e.bins << " bins, rms H mismatch " << e.rms << "\n";
+            else
+              std::cout << "not determined (no bin with >= 100 samples at the grid and every width)\n";
+            std::cout << "  phi_bar   count     H_grid   [95 % interval]\n";
+            const std::size_t col = whole_col + 1 + g;
+            for (std::size_t b = 0; b < n_bins; ++b) {
+              const std::size_t i = col * n_bins + b;
+              if (!(st.count[i] >= 100)) continue;
+              char line[160];
+              std::snprintf(line, sizeof line, "  %7.4f %7.0f %10.4f   [%.4f, %.4f]\n", st.phi_mean[i], st.count[i], st.H[i],
+                            st.H_low[i], st.H_high[i]);
+              std::cout << line;
+            }
+          }
         }
       } catch (const InputError&) {
         throw;
