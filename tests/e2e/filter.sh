@@ -28,7 +28,8 @@ small=(--set 'domain.size_dp=[20,80,20]' --set run.end_time_tref=1.5 --set run.d
 "$generate" "$scene" "${small[@]}" --set particles.solids_fraction=0.08 -o "$tmp/runB" >/dev/null 2>&1 || { fail "generate runB"; exit 1; }
 
 # ---- one run, one rank -----------------------------------------------------------------------------
-"$filter" "$tmp/runA" --from-tref 0.5 --samples 50 -o "$tmp/a.h5" 2>"$tmp/a.err" || { cat "$tmp/a.err"; fail "filter runA"; }
+"$filter" "$tmp/runA" --from-tref 0.5 --samples 50 --grids 6,3 -o "$tmp/a.h5" >"$tmp/a.out" 2>"$tmp/a.err" || { cat "$tmp/a.err"; fail "filter runA"; }
+grep -q "^grid 3 across (3 x 12 x 3 cells" "$tmp/a.out" || fail "grid report: $(cat "$tmp/a.out")"
 "$py" - "$tmp/a.h5" "$tmp/runA/series.h5" <<'PY' || fail "whole-box slip / homogeneous H"
 import sys, h5py, numpy as np
 f = h5py.File(sys.argv[1]); s = h5py.File(sys.argv[2])
@@ -47,7 +48,20 @@ print(f"ok   whole box reproduces the series' slip at {len(whole)} snapshots")
 # samples (>= 5 %), against H ~ 0.1-0.35 in clustered runs. The tails (the densest or most dilute
 # few per cent of boxes, >= 1 % of the samples) are the random fluctuations that act as weak clusters
 # (measured up to 0.032 at 2 cells): 0.06 there.
-for g in [k for k in f if k.startswith("width_")] + ["whole_box"]:
+# The coarse-grid operator on the run's own grid (6 cells across: 20 d_p / 3.33) reproduces the
+# resolved coupling exactly (same deposit, identity restriction, the coupler's gradient and
+# interpolation): H_grid = 0 to round-off in every bin, per snapshot too (1e-11: see test_tsc_grid.cpp).
+own = f["grids/6"]
+assert own.attrs["kind"] == "grid" and own.attrs["operator"] == "tsc-deposit-interpolate"
+assert list(own.attrs["cells"]) == [6, 24, 6] and abs(own.attrs["width_over_cell"] - 1) < 1e-12
+m = own["count"][:] > 0
+assert m.sum() >= 3 and np.all(abs(own["H"][m]) < 1e-11), own["H"][m]
+ps = own["per_snapshot"]; mm = ps["count"][:] > 0
+assert np.all(abs(1 - ps["numerator"][:][mm] / ps["micro"][:][mm]) < 1e-11)
+assert list(f["grids"].attrs["cells_across"]) == [6, 3] and list(f["grids/3"].attrs["cells"]) == [3, 12, 3]
+assert np.isfinite(f["grids/3"].attrs["equivalent_width_m"]) or f["grids/3"].attrs["equivalent_width_bins"] == 0
+print(f"ok   own grid: |H_grid| = {abs(own['H'][m]).max():.1e} in {m.sum()} bins")
+for g in [k for k in f if k.startswith("width_")] + ["whole_box", "grids/3"]:
     c, H = f[g]["count"][:], f[g]["H"][:]
     bulk, tail = c >= 0.05 * c.sum(), c >= 0.01 * c.sum()
     assert np.all(abs(H[bulk]) < 0.03), (g, H[bulk])
@@ -59,8 +73,8 @@ print("ok   homogeneous suspension: |H| < 0.03 in the bulk bins, < 0.06 in the t
 PY
 
 # ---- two runs pooled, 1 rank vs 2 ranks: the same file --------------------------------------------
-"$filter" "$tmp/runA" "$tmp/runB" --samples 20 --quiet -o "$tmp/np1.h5" || fail "filter 2 runs np1"
-"${mpirun_cmd[@]}" -np 2 "$filter" "$tmp/runA" "$tmp/runB" --samples 20 --quiet -o "$tmp/np2.h5" || fail "filter 2 runs np2"
+"$filter" "$tmp/runA" "$tmp/runB" --samples 20 --grids 3,4 --quiet -o "$tmp/np1.h5" || fail "filter 2 runs np1"
+"${mpirun_cmd[@]}" -np 2 "$filter" "$tmp/runA" "$tmp/runB" --samples 20 --grids 3,4 --quiet -o "$tmp/np2.h5" || fail "filter 2 runs np2"
 "$py" - "$tmp/np1.h5" "$tmp/np2.h5" <<'PY' || fail "1 vs 2 ranks"
 import sys, h5py, numpy as np
 a, b = h5py.File(sys.argv[1]), h5py.File(sys.argv[2])
@@ -109,6 +123,8 @@ expect_bad width_not_number "is not a number" -- "$tmp/runA" --widths 3.4,abc -o
 expect_bad physics_differ "fluid.viscosity" -- "$tmp/runA" "$tmp/visc" -o "$tmp/bad.h5"
 expect_bad output_exists "exists" -- "$tmp/runA" -o "$tmp/exists.h5"
 expect_bad bad_bins "--bins" -- "$tmp/runA" --bins 0 -o "$tmp/bad.h5"
+expect_bad grid_finer_than_run "finer than the run's own" -- "$tmp/runA" --grids 7 -o "$tmp/bad.h5"
+expect_bad grid_not_whole "--grids" -- "$tmp/runA" --grids 2.5 -o "$tmp/bad.h5"
 expect_bad from_too_late "no snapshot at or after" -- "$tmp/runA" --from-tref 99 -o "$tmp/bad.h5"
 "${mpirun_cmd[@]}" -np 2 "$filter" "$tmp/trunc" -o "$tmp/bad.h5" >/dev/null 2>"$tmp/err"
 [ $? -eq 2 ] && [ ! -e "$tmp/bad.h5" ] && echo "ok   truncated file at 2 ranks: exit 2" || fail "truncated at 2 ranks"
