@@ -2,6 +2,11 @@
 // (docs/schema-drag-model.md).
 #include "core/filtered_drag.hpp"
 
+#include <mpi.h>
+
+#include <algorithm>
+#include <iostream>
+
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -101,6 +106,7 @@ double BSpline::operator()(double x) const {
 
 double SplineCurves::h(double phi) const {
   const DragModel& m = *model;
+  if (m.table) return std::clamp(m.h_spline(phi), -1.0, m.h_max);  // the spline clamps phi to its ends
   const double lo = m.phi_crit, hi = m.h_spline.upper();
   if (phi < lo) return std::clamp(m.h_spline(lo), 0.0, m.h_max) * std::max(phi, 0.0) / lo;
   return std::clamp(m.h_spline(std::min(phi, hi)), 0.0, m.h_max);
@@ -108,7 +114,8 @@ double SplineCurves::h(double phi) const {
 
 double SplineCurves::a(double phi) const {
   const DragModel& m = *model;
-  return std::exp(m.log_a_spline(std::clamp(phi, m.phi_crit, m.log_a_spline.upper())));
+  if (m.table) return 0.0;
+  return std::exp(std::clamp(m.log_a_spline(std::clamp(phi, m.phi_crit, m.log_a_spline.upper())), m.log_a_min, m.log_a_max));
 }
 
 FilteredDragSetup filtered_drag_setup(const Scene& scene, const Vec3& cell_spacing_m) {
@@ -122,10 +129,42 @@ FilteredDragSetup filtered_drag_setup(const Scene& scene, const Vec3& cell_spaci
   if (scene.fluid->drag == DragLaw::Model) {
     auto model = std::make_shared<DragModel>(load_drag_model(scene.fluid->drag_model_path));
     check_model_matches_scene(*model, scene);
+    setup.warnings = model_calibration_warnings(*model, setup.filter_width_m);
+    int initialised = 0, rank = 0;
+    MPI_Initialized(&initialised);
+    if (initialised) MPI_Comm_rank(MPI_COMM_WORLD, &rank);
+    if (rank == 0)
+      for (const std::string& w : setup.warnings) std::cerr << "warning: " << w << "\n";
     setup.model = std::move(model);
   }
   check_filtered_setup(scene.fluid->drag, setup);
   return setup;
+}
+
+std::vector<std::string> model_calibration_warnings(const DragModel& m, double delta_m) {
+  std::vector<std::string> out;
+  const double d = m.diameter_m > 0 ? m.diameter_m : 1.0;
+  if (m.calibration_operator == "box") {
+    out.push_back(m.path + " was calibrated with the particle-centred box filter (operator = \"box\"), but this run "
+                  "sees phi, u and grad p through its grid's TSC deposit and interpolation, which filters like a box of "
+                  "about 2.45 cells; its Delta = " + number(delta_m / d) + " d_p means a different filter than in the "
+                  "calibration. Calibrate on the coarse grids' operator: cgd-filter --grids, cgd-fit --operator grid "
+                  "(docs/fit.md)");
+    return out;
+  }
+  if (m.calibrated_delta_m.empty()) return out;
+  const auto [lo, hi] = std::minmax_element(m.calibrated_delta_m.begin(), m.calibrated_delta_m.end());
+  if (m.table) {
+    if (std::abs(delta_m - *lo) > 1e-6 * *lo)
+      out.push_back(m.path + " is the a-priori H_grid table of the grid of " + std::to_string(m.table_cells_across) +
+                    " cells across (cell " + number(*lo / d) + " d_p), but this run's cell is " + number(delta_m / d) +
+                    " d_p: the table is applied unchanged (it has no width dependence)");
+  } else if (delta_m < *lo * (1 - 1e-6) || delta_m > *hi * (1 + 1e-6)) {
+    out.push_back(m.path + " was calibrated on coarse grids of cell " + number(*lo / d) + " to " + number(*hi / d) +
+                  " d_p (operator tsc-grid), and this run's cell of " + number(delta_m / d) +
+                  " d_p lies outside: the width dependence 1/(1 + a F^n) is extrapolated");
+  }
+  return out;
 }
 
 void check_filtered_setup(DragLaw law, const FilteredDragSetup& setup) {
@@ -225,6 +264,27 @@ DragModel load_drag_model(const std::string& path) {
   m.c_corr_a = f.attr_double("/c_corr", "a");
   m.c_corr_k = f.attr_double("/c_corr", "k");
   m.c_corr_source = f.attr_string("/c_corr", "source");
+  if (f.has_attr("/", "log_a_min")) m.log_a_min = f.attr_double("/", "log_a_min");
+  if (f.has_attr("/", "log_a_max")) m.log_a_max = f.attr_double("/", "log_a_max");
+  if (!(m.log_a_min <= m.log_a_max))
+    throw InputError(path + ": log_a_min = " + number(m.log_a_min) + " > log_a_max = " + number(m.log_a_max));
+  // calibration (absent in files written before it: the box filter)
+  if (f.has_attr("/", "operator")) m.calibration_operator = f.attr_string("/", "operator");
+  if (m.calibration_operator != "box" && m.calibration_operator != "tsc-grid")
+    throw InputError(path + ": operator = \"" + m.calibration_operator + "\": allowed \"box\" or \"tsc-grid\"");
+  if (f.has_attr("/", "calibrated_delta_m")) m.calibrated_delta_m = f.attr_doubles("/", "calibrated_delta_m");
+  if (f.has_attr("/", "curves")) {
+    const std::string curves = f.attr_string("/", "curves");
+    if (curves != "splines" && curves != "table")
+      throw InputError(path + ": curves = \"" + curves + "\": allowed \"splines\" or \"table\"");
+    m.table = curves == "table";
+  }
+  if (m.table) {
+    if (m.h_spline.order != 2)
+      throw InputError(path + ": curves = \"table\" needs /h of order 2 (piecewise linear), found order " +
+                       std::to_string(m.h_spline.order));
+    if (f.has_attr("/", "table_cells_across")) m.table_cells_across = f.attr_int("/", "table_cells_across");
+  }
   f.close();
   m.checksum = file_checksum_fnv1a(path);
   return m;

@@ -75,17 +75,38 @@ struct DragModel {
   double gravity_m_s2 = 0;  // |g|
   BSpline h_spline;         // h on [phi_crit, phi_max] (identity, clamped to [0, h_max])
   BSpline log_a_spline;     // log a on [phi_crit, phi_max]
+  // the range of log a the per-bin fits identified (attributes log_a_min, log_a_max; absent in older
+  // files: no bound): a = exp(clamp(S(phi), log_a_min, log_a_max)), so the spline's ends cannot run away
+  // where the bins carry little weight on a (docs/fit.md "Low phi")
+  double log_a_min = -HUGE_VAL, log_a_max = HUGE_VAL;
   double h_max = 0.99;      // upper clamp of h (h < 1 keeps beta_bar > 0)
   double width_exponent = 1;  // n of the width dependence 1/(1 + a F^n); 1 = Radl & Sundaresan's form
   double c_corr_a = 0.0, c_corr_k = 0.05;
   std::string c_corr_source;  // "paper" (Radl & Sundaresan 2014) or "parcel-fit"
+  // What the model was calibrated for (docs/schema-drag-model.md "Calibration"): "box" (the particle-
+  // centred box filter of width Delta; files without the attribute) or "tsc-grid" (H_grid of coarse grids,
+  // the TSC deposit+interpolate operator of the grid a coarse run uses, Delta = its cell size).
+  std::string calibration_operator = "box";
+  std::vector<double> calibrated_delta_m;  // the Delta (box widths or grid cell sizes) fitted; may be empty
+  // curves = "table" (cgd-fit --grid-table N): h is the piecewise-linear table of H_grid of one grid
+  // (the order-2 B-spline /h through (phi_k, H_k)), held constant outside it, clamped to [-1, h_max], with
+  // no phi_crit rule, and a = 0: the correction is 1 - H_grid(phi) at any Delta (meant for grid N's Delta).
+  bool table = false;
+  std::int64_t table_cells_across = 0;
 };
+
+/// Warnings for a run with filter width `delta_m` (the cube root of its cell volume) using `model`:
+/// calibrated for the box filter (a coarse run applies its grid's TSC operator, which filters like a
+/// box of ~2.45 cells), or for grids whose cell sizes do not bracket delta_m, or a table of another
+/// grid's cell. Empty when the calibration fits the run.
+std::vector<std::string> model_calibration_warnings(const DragModel& model, double delta_m);
 
 /// Master curves of a fitted model (docs/schema-drag-model.md, "Evaluating h and a"):
 ///   h(phi) = clamp(S_h(phi), 0, h_max)                  for phi_crit <= phi <= phi_max,
 ///          = h(phi_crit) * max(phi, 0) / phi_crit        for phi < phi_crit (linear to 0, the paper's
 ///                                                        suggestion), h(phi_max) above phi_max;
-///   a(phi) = exp(S_log_a(clamp(phi, phi_crit, phi_max)))   (> 0, continuous, constant outside).
+///   a(phi) = exp(clamp(S_log_a(clamp(phi, phi_crit, phi_max)), log_a_min, log_a_max))   (> 0, continuous,
+///            constant outside; log_a_min/max the range the per-bin fits identified, when the file has them).
 /// phi_max is the upper end of the splines' knot vectors.
 struct SplineCurves {
   const DragModel* model = nullptr;
@@ -125,10 +146,13 @@ struct FilteredDragSetup {
   double l_char_m = 0;                     // L_char of the run (docs/models.md convention)
   double parcel_size = 1;                  // alpha
   bool parcel_correction = true;           // false: c_corr = 1 (fluid.parcel_correction = false)
+  std::vector<std::string> warnings;       // model_calibration_warnings (printed by filtered_drag_setup)
 };
 
 /// The setup of a run's drag law from its scene: for drag = "model" the model file fluid.drag_model is
-/// read and checked against the scene (check_model_matches_scene); Delta = cube root of the cell
+/// read and checked against the scene (check_model_matches_scene), and its calibration against the
+/// run's Delta (model_calibration_warnings: kept in `warnings` and printed once on stderr, by rank 0 of
+/// MPI_COMM_WORLD); Delta = cube root of the cell
 /// volume (cell_spacing_m), L_char from the scene's derived scales, alpha = particles.parcel_size.
 /// Microscopic laws get an empty setup (nothing read). InputError as load_drag_model and
 /// check_model_matches_scene.

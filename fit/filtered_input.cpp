@@ -92,7 +92,18 @@ FilteredFile read_filtered_file(const std::string& path) {
     groups.push_back("/width_" + std::to_string(k));
   if (f.exists("/whole_box")) groups.push_back("/whole_box");
   out.has_per_snapshot = !groups.empty() && f.exists(groups.front() + "/per_snapshot/numerator");
-  for (const std::string& g : groups) {
+  // the coarse grids: /grids/<N> (cgd-filter --grids), cells across descending (ascending cell size)
+  std::vector<std::string> grid_groups;
+  if (f.exists("/grids") && f.has_attr("/grids", "cells_across"))
+    for (std::int64_t n : f.attr_ints("/grids", "cells_across")) {
+      const std::string g = "/grids/" + std::to_string(n);
+      if (!f.exists(g)) throw InputError(path + ": /grids lists " + std::to_string(n) + " cells across but lacks the group " + g);
+      grid_groups.push_back(g);
+    }
+  const std::size_t n_box_groups = groups.size();
+  groups.insert(groups.end(), grid_groups.begin(), grid_groups.end());
+  for (std::size_t gi = 0; gi < groups.size(); ++gi) {
+    const std::string& g = groups[gi];
     WidthSeries w;
     w.group = g;
     need_attr(g, "F");
@@ -100,6 +111,12 @@ FilteredFile read_filtered_file(const std::string& path) {
     if (f.has_attr(g, "width_m")) w.width_m = f.attr_double(g, "width_m");
     if (f.has_attr(g, "width_over_cell")) w.width_over_cell = f.attr_double(g, "width_over_cell");
     w.whole_box = g == "/whole_box";
+    w.grid = gi >= n_box_groups;
+    if (w.grid) {
+      for (const char* key : {"cells_across", "cell_size_over_dp"}) need_attr(g, key);
+      w.cells_across = f.attr_int(g, "cells_across");
+      w.cell_size_over_dp = f.attr_double(g, "cell_size_over_dp");
+    }
     if (!(w.F > 0)) throw InputError(path + ": " + g + " attribute F = " + number(w.F) + ": must be > 0");
     for (const char* d : {"H", "H_low", "H_high", "count", "phi_mean"}) need(g + "/" + d);
     w.H = f.read_double(g + "/H");
@@ -124,10 +141,29 @@ FilteredFile read_filtered_file(const std::string& path) {
       w.micro = f.read_double(g + "/per_snapshot/micro");
       w.snapshot_count = f.read_int(g + "/per_snapshot/count");
     }
-    out.widths.push_back(std::move(w));
+    (w.grid ? out.grids : out.widths).push_back(std::move(w));
   }
   f.close();
   out.checksum = file_checksum_fnv1a(path);
+  return out;
+}
+
+std::vector<FilteredFile> select_operator(const std::vector<FilteredFile>& files, const std::string& op) {
+  if (op == "box") return files;
+  if (op != "grid") throw InputError("cgd-fit: --operator " + op + ": allowed \"box\" or \"grid\"");
+  std::vector<FilteredFile> out = files;
+  for (FilteredFile& f : out) {
+    if (f.grids.empty())
+      throw InputError(f.path + ": --operator grid needs the coarse grids' H (groups /grids/<N>), and the file has "
+                       "none: filter the runs with cgd-filter --grids N1,N2,... (docs/filter.md)");
+    // the resolved run's own grid is the identity (H_grid = 0 by construction, zero interval): left out
+    std::vector<WidthSeries> series;
+    for (const WidthSeries& w : f.grids)
+      if (!(w.width_over_cell < 1.0 + 1e-6)) series.push_back(w);
+    for (const WidthSeries& w : f.widths)
+      if (w.whole_box) series.push_back(w);
+    f.widths = std::move(series);
+  }
   return out;
 }
 

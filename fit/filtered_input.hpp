@@ -20,11 +20,14 @@ struct Physics {
 
 /// One filter width of one file (`/width_<k>`, or `/whole_box`), per phi bin.
 struct WidthSeries {
-  std::string group;  // "/width_0", ..., "/whole_box"
-  double F = 0;       // L_char / width
+  std::string group;  // "/width_0", ..., "/whole_box", "/grids/<N>"
+  double F = 0;       // L_char / width (a grid: L_char / its cell size)
   double width_m = 0;
   double width_over_cell = NAN;  // attribute width_over_cell (NaN when absent: not checked)
   bool whole_box = false;
+  bool grid = false;              // a coarse grid's operator (/grids/<N>, cgd-filter --grids)
+  std::int64_t cells_across = 0;  // grid: cells across x
+  double cell_size_over_dp = NAN; // grid: its cell size (cube root of the cell volume) / d_p
   std::vector<double> H, H_low, H_high, phi_mean;  // per bin (NaN where the bin is empty)
   std::vector<std::int64_t> count;                 // particle samples per bin
   // per-snapshot sums (n_snapshots x n_bins, row-major), empty when the file has no /per_snapshot
@@ -38,6 +41,7 @@ struct FilteredFile {
   Physics physics;
   std::vector<double> phi_edges;       // /bins/phi_edges
   std::vector<WidthSeries> widths;     // the box widths in file order, then /whole_box if present
+  std::vector<WidthSeries> grids;      // /grids/<N> (cgd-filter --grids), cells across descending; may be empty
   std::vector<std::string> run_paths;  // /runs paths
   std::vector<std::int64_t> snapshot_run, snapshot_block;  // /snapshots/run_index, block
   bool has_per_snapshot = false;
@@ -49,6 +53,12 @@ struct FilteredFile {
 /// Read one filtered file. InputError naming the file and the key if it is missing, not HDF5, not
 /// cgd_format = "filtered", of another version, or lacks (or has inconsistent) required datasets.
 FilteredFile read_filtered_file(const std::string& path);
+
+/// The files as the fitter sees them for an operator: "box" leaves them as read; "grid" puts each file's
+/// coarse grids (/grids/<N>, then /whole_box as a check) in place of its box widths, so that every step
+/// of the fit (bins, splines, bootstrap, cross-validation) runs on H_grid with F = L_char / cell size.
+/// InputError naming the files when a file has no /grids (filter it with cgd-filter --grids).
+std::vector<FilteredFile> select_operator(const std::vector<FilteredFile>& files, const std::string& op);
 
 /// InputError naming both files and the key unless every file has the same physics (micro_drag
 /// exactly; u_t, L_char, d_p, densities, viscosity to 1e-6 relative) and the same /bins/phi_edges.

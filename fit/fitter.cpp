@@ -32,6 +32,13 @@ constexpr double kLogAMin = -6.907755278982137, kLogAMax = 9.210340371976184;  /
 // (drag increase, seen at very low phi in the paper) is allowed down to -1 per bin, the curve is
 // clamped to [0, h_max] afterwards.
 constexpr double kHMin = -1.0, kHMax = 1.0;
+// Low phi (docs/fit.md "Low phi"): a is identified only where a F^n is O(1) at some width; when
+// a F^n >> 1 at every width, H ~ (h/a)/F^n and only h/a is seen. A bin's a is bounded above by
+// kIdentifiableAF / min F^n (a F^n <= 10 at the widest width: there H = h/11, and the curve's bend is
+// still within the data). Without it, low-phi bins whose H is ~0 at the narrow (precise) widths and
+// rises at the wide ones ran to a = 1e4 with h = 1, i.e. H ~ 0 at every width: the correction switched
+// off where the wide widths show one.
+constexpr double kIdentifiableAF = 10.0;
 const double kNaN = std::numeric_limits<double>::quiet_NaN();
 
 // ---- observations: H per (file, width) series and bin ---------------------------------------------------
@@ -157,7 +164,9 @@ void fit_one_bin(const BinPoints& pts, BinEstimate& out) {
     return chi2;
   };
   double best_chi2 = std::numeric_limits<double>::infinity(), best_h = 0, best_t = 0;
-  const double step = (kLogAMax - kLogAMin) / 60.0;
+  const double min_F = *std::min_element(pts.F.begin(), pts.F.end());
+  const double t_max = std::clamp(std::log(kIdentifiableAF / min_F), kLogAMin + 1.0, kLogAMax);
+  const double step = (t_max - kLogAMin) / 60.0;
   for (int k = 0; k <= 60; ++k) {
     double h_k = 0;
     const double t = kLogAMin + step * k, chi2 = profile(t, h_k);
@@ -166,7 +175,7 @@ void fit_one_bin(const BinPoints& pts, BinEstimate& out) {
   const double coarse_t = best_t;
   for (int k = -20; k <= 20; ++k) {
     double h_k = 0;
-    const double t = std::clamp(coarse_t + step * k / 20.0, kLogAMin, kLogAMax), chi2 = profile(t, h_k);
+    const double t = std::clamp(coarse_t + step * k / 20.0, kLogAMin, t_max), chi2 = profile(t, h_k);
     if (chi2 < best_chi2) best_chi2 = chi2, best_h = h_k, best_t = t;
   }
   double h = best_h, t = best_t, se_h = kNaN, se_t = kNaN, chi2 = best_chi2;
@@ -192,7 +201,7 @@ void fit_one_bin(const BinPoints& pts, BinEstimate& out) {
     gsl_blas_ddot(gsl_multifit_nlinear_residual(w), gsl_multifit_nlinear_residual(w), &c2);
     // the unconstrained refinement is kept when it stays inside the bounds and does not lose
     if (std::isfinite(h1) && std::isfinite(t1) && h1 >= kHMin && h1 <= kHMax && t1 >= kLogAMin &&
-        t1 <= kLogAMax && c2 <= best_chi2 * (1 + 1e-12)) {
+        t1 <= t_max && c2 <= best_chi2 * (1 + 1e-12)) {
       h = h1;
       t = t1;
       chi2 = c2;
@@ -216,8 +225,9 @@ void fit_one_bin(const BinPoints& pts, BinEstimate& out) {
   gsl_multifit_nlinear_free(w);
   // An unidentifiable a (h ~ 0, or H flat in F) or a at its bound carries little information on a:
   // give it a weak weight in the spline (se of log a >= 2, a factor 7) instead of dropping the bin's h.
-  const bool at_bound = t <= kLogAMin + 1e-9 || t >= kLogAMax - 1e-9 || h <= kHMin || h >= kHMax;
+  const bool at_bound = t <= kLogAMin + 1e-9 || t >= t_max - 1e-9 || h <= kHMin || h >= kHMax;
   out.at_bound = at_bound;
+  out.a_at_cap = t_max < kLogAMax && t >= t_max - 1e-9;
   if (!std::isfinite(se_t) || at_bound) se_t = std::max(std::isfinite(se_t) ? se_t : 0.0, 2.0);
   if (!std::isfinite(se_h)) se_h = kNaN;
   out.h = h;
@@ -550,6 +560,11 @@ FitResult fit_filtered_drag(const std::vector<FilteredFile>& files, const FitOpt
   M.gravity_m_s2 = p.u_t_m_s * p.u_t_m_s / (p.diameter_m * std::pow(p.l_char_m / p.diameter_m, 3));
   M.h_spline = main.h.spline;
   M.log_a_spline = main.log_a.spline;
+  // the log a curve stays within the range the bins identified (docs/fit.md "Low phi")
+  M.log_a_min = HUGE_VAL;
+  M.log_a_max = -HUGE_VAL;
+  for (const BinEstimate& b : R.bins)
+    if (b.used) M.log_a_min = std::min(M.log_a_min, b.log_a), M.log_a_max = std::max(M.log_a_max, b.log_a);
   M.c_corr_a = Radl2014Curves::kCcorrA;
   M.c_corr_k = Radl2014Curves::kCcorrK;
   M.c_corr_source = "paper";

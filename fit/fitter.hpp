@@ -45,6 +45,9 @@ struct FitOptions {
   bool cross_validate = true;        // leave-one-run-out
   double width_exponent = 1.0;       // n of 1/(1 + a F^n) (1: Radl & Sundaresan 2014)
   bool fit_width_exponent = false;   // step 0: fit n instead
+  // "box": the box widths (/width_<k>); "grid": the coarse grids' H_grid (/grids/<N>, Delta = the grid's
+  // cell size; select_operator) — the model file's operator is then "tsc-grid"
+  std::string calibration_operator = "box";
 };
 
 /// The per-bin estimate of step 1.
@@ -55,7 +58,10 @@ struct BinEstimate {
   std::string dropped;  // why not ("" when used)
   int widths = 0;       // points in the fit
   double h = 0, log_a = 0, se_h = 0, se_log_a = 0, chi2 = 0;
-  bool at_bound = false;  // h at -1 or 1, or a at 1e-3 or 1e4: the form does not fit this bin well
+  bool at_bound = false;  // h at -1 or 1, or a at 1e-3 or its upper bound: the form does not fit this bin well
+  // a at its identifiability cap a <= 10 / min F^n (a F^n <= 10 at the widest width: beyond it only h/a is
+  // seen, H ~ (h/a)/F^n; docs/fit.md "Low phi")
+  bool a_at_cap = false;
   // bootstrap standard deviations (over the replicates that fitted the bin): unlike se_h, se_log_a from
   // (J^T J)^-1 they include the correlation of the widths' errors (NaN without a bootstrap)
   double boot_se_h = NAN, boot_se_log_a = NAN;
@@ -119,6 +125,15 @@ FitResult fit_filtered_drag(const std::vector<FilteredFile>& files, const FitOpt
 /// The fit report (a page a researcher can judge in a minute), with Radl 2014 beside the fit.
 std::string fit_report(const FitResult& result, const std::vector<FilteredFile>& files,
                        const FitOptions& options);
+
+/// The perfect-closure model (cgd-fit --grid-table N, docs/fit.md): H_grid of the grid of N cells across,
+/// pooled over the files (sums of the per-snapshot numerator and micro sums per bin), as the table of a
+/// model file with curves = "table": (phi_k, H_k) at the bins' mean phi with >= min_count samples, h the
+/// order-2 (piecewise-linear) B-spline through them, a = 0 (log a = -700 in /log_a). InputError naming
+/// the files when a file lacks /grids/N or fewer than 2 bins qualify. Writes atomically; returns the
+/// report.
+std::string write_grid_table_model(const std::string& path, const std::vector<FilteredFile>& files, int cells_across,
+                                   std::int64_t min_count, const Scene& scene);
 
 /// Write the model file (docs/schema-drag-model.md) atomically; `scene` supplies the common root
 /// attributes and /params (the first filtered file's scene).

@@ -59,6 +59,17 @@ int main(int argc, char** argv) {
         "--no-cross-validation", [&](std::int64_t) { options.cross_validate = false; },
         "Skip the leave-one-run-out cross-validation");
     app.add_flag("--quiet", quiet, "Print no report");
+    std::string op = "box";
+    app.add_option("--operator", op,
+                   "What the model is calibrated on: \"box\" (the box widths /width_<k>, default) or \"grid\" (H_grid "
+                   "of the coarse grids /grids/<N> of cgd-filter --grids, Delta = the grid's cell size: what a coarse "
+                   "run applies; the model file's operator is then \"tsc-grid\")")
+        ->type_name("box|grid");
+    int grid_table = 0;
+    app.add_option("--grid-table", grid_table,
+                   "Perfect-closure model: write H_grid of the grid of N cells across as a table model (curves = table, "
+                   "a = 0): a coarse run on that grid applies exactly the a-priori correction (docs/fit.md)")
+        ->type_name("N");
     std::string parcel_model;
     app.add_option("--parcel-fit", parcel_model,
                    "Parcel fit: the inputs are cgd-coarse run directories run with this model and "
@@ -97,10 +108,29 @@ int main(int argc, char** argv) {
       return cgd::kExitOk;
     }
 
+    if (op != "box" && op != "grid")
+      throw cgd::InputError("cgd-fit: --operator " + op + ": allowed \"box\" or \"grid\"");
+    if (app.count("--grid-table") && grid_table < 1)
+      throw cgd::InputError("cgd-fit: --grid-table " + std::to_string(grid_table) + ": allowed a number of cells across >= 1");
+    options.calibration_operator = op;
+    // a grid equal to the resolved one is the identity (H_grid = 0 by construction): a check, not data
+    if (op == "grid" && !app.count("--min-width-over-cell")) options.min_width_over_cell = 1.01;
     // every input read and checked before anything is written
     std::vector<cgd::fit::FilteredFile> files;
     for (const std::string& path : inputs) files.push_back(cgd::fit::read_filtered_file(path));
     cgd::fit::check_same_physics(files);
+    if (app.count("--grid-table")) {
+      const cgd::Scene table_scene =
+          cgd::load_scene_from_string(files.front().scene_toml, files.front().path + " (scene)");
+      const std::filesystem::path dir = std::filesystem::absolute(output).parent_path();
+      if (!std::filesystem::is_directory(dir))
+        throw cgd::InputError(output + ": cannot write the model file: no directory " + dir.string());
+      const std::string report =
+          cgd::fit::write_grid_table_model(output, files, grid_table, options.min_count, table_scene);
+      if (!quiet) std::cout << report << "wrote " << output << "\n";
+      return cgd::kExitOk;
+    }
+    files = cgd::fit::select_operator(files, op);
     const cgd::Scene scene =
         cgd::load_scene_from_string(files.front().scene_toml, files.front().path + " (scene)");
     const std::filesystem::path parent = std::filesystem::absolute(output).parent_path();

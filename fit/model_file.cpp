@@ -1,9 +1,11 @@
 // The drag model file (docs/schema-drag-model.md; read back by core/filtered_drag.cpp's
 // load_drag_model) and the fit report.
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <sstream>
 
+#include "core/error.hpp"
 #include "core/output.hpp"
 #include "fit/fitter.hpp"
 
@@ -46,6 +48,30 @@ void write_model_file(const std::string& path, const FitResult& R, const std::ve
       f.set_attr("/", "width_exponent_low", R.width_exponent_low);
       f.set_attr("/", "width_exponent_high", R.width_exponent_high);
     }
+    // the calibration: the operator the H data came from and the Delta fitted
+    {
+      const bool grid = o.calibration_operator == "grid";
+      f.set_attr("/", "operator", std::string(grid ? "tsc-grid" : "box"));
+      if (grid) f.set_attr("/", "kernel", std::string("tsc"));
+      f.set_attr("/", "curves", std::string("splines"));
+      std::vector<double> delta;
+      std::vector<std::int64_t> across;
+      for (std::size_t i = 0; i < R.data_F.size(); ++i)
+        if (R.data_fitted[i]) delta.push_back(M.l_char_m / R.data_F[i]);
+      for (const FilteredFile& ff : files)
+        for (const WidthSeries& w : ff.widths)
+          if (w.grid && !(w.width_over_cell < o.min_width_over_cell - 1e-9)) across.push_back(w.cells_across);
+      std::sort(delta.begin(), delta.end());
+      delta.erase(std::unique(delta.begin(), delta.end(), [](double a, double b) { return std::abs(a - b) <= 1e-9 * a; }),
+                  delta.end());
+      std::sort(across.begin(), across.end());
+      across.erase(std::unique(across.begin(), across.end()), across.end());
+      std::vector<double> over_dp;
+      for (double x : delta) over_dp.push_back(x / M.diameter_m);
+      f.set_attr("/", "calibrated_delta_m", delta);
+      f.set_attr("/", "calibrated_delta_over_dp", over_dp);
+      if (grid) f.set_attr("/", "calibrated_cells_across", across);
+    }
     f.set_attr("/", "base_drag", std::string(to_string(M.base_law)));
     f.set_attr("/", "u_t_convention", M.u_t_convention);
     f.set_attr("/", "u_t_m_s", M.u_t_m_s);
@@ -53,6 +79,8 @@ void write_model_file(const std::string& path, const FitResult& R, const std::ve
     f.set_attr("/", "phi_crit", M.phi_crit);
     f.set_attr("/", "phi_max", M.h_spline.upper());
     f.set_attr("/", "h_max", M.h_max);
+    f.set_attr("/", "log_a_min", M.log_a_min);
+    f.set_attr("/", "log_a_max", M.log_a_max);
     f.set_attr("/", "diameter_m", M.diameter_m);
     f.set_attr("/", "particle_density_kg_m3", M.particle_density_kg_m3);
     f.set_attr("/", "fluid_density_kg_m3", M.fluid_density_kg_m3);
@@ -63,7 +91,7 @@ void write_model_file(const std::string& path, const FitResult& R, const std::ve
         "S_h(phi); h = clip(S_h(phi), 0, h_max) on [phi_crit, phi_max], h(phi_crit) phi/phi_crit below, "
         "h(phi_max) above");
     write_spline(f, "/log_a", M.log_a_spline,
-                 "S(phi) = log a(phi); a = exp(S(clip(phi, phi_crit, phi_max)))");
+                 "S(phi) = log a(phi); a = exp(clip(S(clip(phi, phi_crit, phi_max)), log_a_min, log_a_max))");
     f.create_group("/c_corr");
     f.set_attr("/c_corr", "a", M.c_corr_a);
     f.set_attr("/c_corr", "k", M.c_corr_k);
@@ -94,7 +122,7 @@ void write_model_file(const std::string& path, const FitResult& R, const std::ve
     // per-bin estimates (the data points of the paper's Figure 1)
     f.create_group("/bins");
     std::vector<double> phi, center, h, se_h, a, se_log_a, chi2, boot_se_h, boot_se_log_a;
-    std::vector<std::int64_t> used, widths, at_bound;
+    std::vector<std::int64_t> used, widths, at_bound, a_at_cap;
     for (const BinEstimate& b : R.bins) {
       phi.push_back(b.phi);
       center.push_back(b.phi_center);
@@ -108,6 +136,7 @@ void write_model_file(const std::string& path, const FitResult& R, const std::ve
       used.push_back(b.used ? 1 : 0);
       widths.push_back(b.widths);
       at_bound.push_back(b.used && b.at_bound ? 1 : 0);
+      a_at_cap.push_back(b.used && b.a_at_cap ? 1 : 0);
     }
     for (const auto& [name, v] : {std::pair<const char*, const std::vector<double>*>{"phi", &phi},
                                   {"phi_center", &center},
@@ -122,6 +151,7 @@ void write_model_file(const std::string& path, const FitResult& R, const std::ve
     f.write_replicated("/bins/used", used, {used.size()});
     f.write_replicated("/bins/widths", widths, {widths.size()});
     f.write_replicated("/bins/at_bound", at_bound, {at_bound.size()});
+    f.write_replicated("/bins/a_at_cap", a_at_cap, {a_at_cap.size()});
 
     // the data as fitted (H of every width of every file per bin)
     if (!R.data_F.empty()) {
@@ -202,6 +232,121 @@ void write_model_file(const std::string& path, const FitResult& R, const std::ve
   });
 }
 
+std::string write_grid_table_model(const std::string& path, const std::vector<FilteredFile>& files, int cells_across,
+                                   std::int64_t min_count, const Scene& scene) {
+  const std::string group = "/grids/" + std::to_string(cells_across);
+  const FilteredFile& first = files.front();
+  const std::size_t nb = first.bins();
+  std::vector<double> num(nb, 0.0), mic(nb, 0.0), count(nb, 0.0), phi_sum(nb, 0.0);
+  double cell_over_dp = 0;
+  for (const FilteredFile& f : files) {
+    const WidthSeries* g = nullptr;
+    for (const WidthSeries& w : f.grids)
+      if (w.cells_across == cells_across) g = &w;
+    if (!g)
+      throw InputError(f.path + ": --grid-table " + std::to_string(cells_across) + ": the file has no " + group +
+                       " (filter the runs with cgd-filter --grids " + std::to_string(cells_across) + ")");
+    if (!f.has_per_snapshot)
+      throw InputError(f.path + ": --grid-table needs the per-snapshot sums (" + group + "/per_snapshot)");
+    if (cell_over_dp == 0) cell_over_dp = g->cell_size_over_dp;
+    if (std::abs(g->cell_size_over_dp - cell_over_dp) > 1e-6 * cell_over_dp)
+      throw InputError(f.path + ": " + group + " has cells of " + format("%.6g", g->cell_size_over_dp) + " d_p, " +
+                       first.path + " of " + format("%.6g", cell_over_dp) + " d_p: a table is for one grid");
+    for (std::size_t k = 0; k < f.snapshots(); ++k)
+      for (std::size_t b = 0; b < nb; ++b) {
+        num[b] += g->numerator[k * nb + b];
+        mic[b] += g->micro[k * nb + b];
+      }
+    for (std::size_t b = 0; b < nb; ++b)
+      if (g->count[b] > 0 && std::isfinite(g->phi_mean[b])) {
+        count[b] += static_cast<double>(g->count[b]);
+        phi_sum[b] += static_cast<double>(g->count[b]) * g->phi_mean[b];
+      }
+  }
+  std::vector<double> phi, H, n;
+  for (std::size_t b = 0; b < nb; ++b)
+    if (count[b] >= static_cast<double>(min_count) && mic[b] != 0.0) {
+      phi.push_back(phi_sum[b] / count[b]);
+      H.push_back(1.0 - num[b] / mic[b]);
+      n.push_back(count[b]);
+    }
+  if (phi.size() < 2)
+    throw InputError(first.path + ": --grid-table " + std::to_string(cells_across) + ": " + std::to_string(phi.size()) +
+                     " bin(s) of " + group + " have >= " + std::to_string(min_count) +
+                     " samples; a table needs at least 2 (lower --min-count or filter longer runs)");
+  const Physics& p = first.physics;
+  DragModel M;
+  M.base_law = microscopic_drag_law(p.micro_drag).value();
+  M.diameter_m = p.diameter_m;
+  const double delta = cell_over_dp * p.diameter_m;
+  BSpline h;
+  h.order = 2;
+  h.knots.push_back(phi.front());
+  h.knots.insert(h.knots.end(), phi.begin(), phi.end());
+  h.knots.push_back(phi.back());
+  h.coefficients = H;
+  BSpline log_a = h;
+  log_a.coefficients.assign(H.size(), -700.0);  // a = exp(-700) ~ 1e-304: 0 for any evaluator of the file
+  const double h_max = 0.99;
+  h5::write_atomically(path, MPI_COMM_SELF, [&](h5::File& f) {
+    schema::write_common(f, "drag_model", scene);
+    f.set_attr("/", "model_form",
+               std::string("beta_bar/beta_micro = c_corr(alpha) [1 - H_grid(phi)], H_grid the a-priori filtered drag "
+                           "correction of one coarse grid (curves = table): piecewise linear in phi through the table, "
+                           "constant outside it, clamped to [-1, h_max]; no width dependence (a = 0)"));
+    f.set_attr("/", "curves", std::string("table"));
+    f.set_attr("/", "operator", std::string("tsc-grid"));
+    f.set_attr("/", "kernel", std::string("tsc"));
+    f.set_attr("/", "table_cells_across", static_cast<std::int64_t>(cells_across));
+    f.set_attr("/", "calibrated_delta_m", std::vector<double>{delta});
+    f.set_attr("/", "calibrated_delta_over_dp", std::vector<double>{cell_over_dp});
+    f.set_attr("/", "calibrated_cells_across", std::vector<std::int64_t>{cells_across});
+    f.set_attr("/", "width_exponent", 1.0);
+    f.set_attr("/", "width_exponent_fitted", std::int64_t{0});
+    f.set_attr("/", "base_drag", std::string(to_string(M.base_law)));
+    f.set_attr("/", "u_t_convention", std::string(kUtConvention));
+    f.set_attr("/", "u_t_m_s", p.u_t_m_s);
+    f.set_attr("/", "l_char_m", p.l_char_m);
+    f.set_attr("/", "phi_crit", phi.front());
+    f.set_attr("/", "phi_max", phi.back());
+    f.set_attr("/", "h_max", h_max);
+    f.set_attr("/", "diameter_m", p.diameter_m);
+    f.set_attr("/", "particle_density_kg_m3", p.particle_density_kg_m3);
+    f.set_attr("/", "fluid_density_kg_m3", p.fluid_density_kg_m3);
+    f.set_attr("/", "fluid_viscosity_Pa_s", p.fluid_viscosity_Pa_s);
+    f.set_attr("/", "gravity_m_s2", p.u_t_m_s * p.u_t_m_s / (p.diameter_m * std::pow(p.l_char_m / p.diameter_m, 3)));
+    write_spline(f, "/h", h, "H_grid(phi): order-2 B-spline = the piecewise-linear table (knots = the bins' mean phi, "
+                             "coefficients = H_grid); clamped to [-1, h_max], constant outside the knots");
+    write_spline(f, "/log_a", log_a, "log a = -700: a = 0 (the table has no width dependence)");
+    f.create_group("/table");
+    write_vector(f, "/table/phi", phi);
+    write_vector(f, "/table/H", H);
+    write_vector(f, "/table/count", n);
+    f.set_attr("/table", "source_group", group);
+    f.set_attr("/table", "min_count", min_count);
+    f.create_group("/c_corr");
+    f.set_attr("/c_corr", "a", Radl2014Curves::kCcorrA);
+    f.set_attr("/c_corr", "k", Radl2014Curves::kCcorrK);
+    f.set_attr("/c_corr", "source", std::string("paper"));
+    f.set_attr("/c_corr", "fitted", std::int64_t{0});
+    f.set_attr("/c_corr", "formula", std::string("c_corr = a + (1 - a) exp(-k (alpha - 1))"));
+    f.create_group("/sources");
+    std::vector<std::string> paths, sums;
+    for (const FilteredFile& ff : files) paths.push_back(ff.path), sums.push_back(ff.checksum);
+    f.set_attr("/sources", "files", paths);
+    f.set_attr("/sources", "checksums", sums);
+    f.set_attr("/sources", "checksum_kind", std::string("FNV-1a 64-bit of the file's bytes, hex"));
+  });
+  std::ostringstream out;
+  out << "cgd-fit --grid-table " << cells_across << ": the a-priori H_grid of the grid of " << cells_across
+      << " cells across (cell " << format("%.4g", cell_over_dp) << " d_p) as a table model (curves = table, a = 0), "
+      << phi.size() << " bins with >= " << min_count << " samples, pooled over " << files.size() << " file(s)\n"
+      << "    phi     H_grid   samples\n";
+  for (std::size_t i = 0; i < phi.size(); ++i)
+    out << format("  %6.4f", phi[i]) << format("  %8.4f", H[i]) << format("  %8.0f", n[i]) << "\n";
+  return out.str();
+}
+
 std::string fit_report(const FitResult& R, const std::vector<FilteredFile>& files, const FitOptions& o) {
   std::ostringstream out;
   const SplineCurves curves{&R.model};
@@ -209,6 +354,8 @@ std::string fit_report(const FitResult& R, const std::vector<FilteredFile>& file
   const bool n1 = R.model.width_exponent == 1.0;
   const std::string form = n1 ? "1/(1 + aF)" : "1/(1 + aF^n)";
   out << "cgd-fit: H(F, phi) = h(phi)/(1 + a(phi) F" << (n1 ? "" : "^n") << "), F = L_char/Delta";
+  out << (o.calibration_operator == "grid" ? " (operator tsc-grid: H_grid of the coarse grids, Delta = cell size)"
+                                           : " (operator box: box filters of width Delta)");
   if (!n1 || o.fit_width_exponent) out << ", n = " << format("%.3f", R.model.width_exponent);
   out << "; " << files.size()
       << " filtered file(s), base law " << to_string(R.model.base_law)
@@ -248,6 +395,24 @@ std::string fit_report(const FitResult& R, const std::vector<FilteredFile>& file
         out << "  n=" << format("%.3g", n) << ": " << format("%.4g", R.exponent_chi2[i]);
     }
     out << "\n";
+  }
+  if (o.fit_width_exponent) {
+    for (std::size_t i = 0; i < R.exponent_grid.size(); ++i)
+      if (std::abs(R.exponent_grid[i] - 1.0) < 1e-9 && std::isfinite(R.exponent_chi2_per_dof)) {
+        const std::size_t best = static_cast<std::size_t>(
+            std::min_element(R.exponent_chi2.begin(), R.exponent_chi2.end()) - R.exponent_chi2.begin());
+        const double dof = R.exponent_chi2[best] / R.exponent_chi2_per_dof;
+        out << "  chi2/dof at n = 1: " << format("%.3f", R.exponent_chi2[i] / dof) << " against "
+            << format("%.3f", R.exponent_chi2_per_dof) << " at n = " << format("%.3f", R.width_exponent)
+            << " (the same bins)\n";
+      }
+  }
+  {
+    int capped = 0;
+    for (const BinEstimate& b : R.bins) capped += b.used && b.a_at_cap;
+    if (capped > 0)
+      out << "low phi: " << capped << " bin(s) with a at its identifiability bound a F^n <= 10 at the widest width "
+          << "(only h/a is seen beyond it; docs/fit.md \"Low phi\")\n";
   }
   out << "per-bin fits: chi2/dof = " << format("%.2f", R.chi2_per_dof)
       << " (about 1 when " << form << " describes the width dependence within the filter's intervals)\n";

@@ -41,6 +41,7 @@ def curves(path):
         ta, ca, ka = f["log_a/knots"][()], f["log_a/coefficients"][()], int(f["log_a"].attrs["order"])
         phi_crit, h_max = float(f.attrs["phi_crit"]), float(f.attrs["h_max"])
         phi_max = th[len(ch)]
+        la_min, la_max = float(f.attrs.get("log_a_min", -np.inf)), float(f.attrs.get("log_a_max", np.inf))
 
     def h(phi):
         if phi < phi_crit:
@@ -48,7 +49,7 @@ def curves(path):
         return min(max(de_boor(th, ch, kh, min(phi, phi_max)), 0.0), h_max)
 
     def a(phi):
-        return np.exp(de_boor(ta, ca, ka, min(max(phi, phi_crit), ta[len(ca)])))
+        return np.exp(min(max(de_boor(ta, ca, ka, min(max(phi, phi_crit), ta[len(ca)])), la_min), la_max))
 
     return h, a
 
