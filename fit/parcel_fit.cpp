@@ -133,7 +133,9 @@ ParcelFitResult fit_parcel_correction(std::vector<ParcelRun> runs, DragLaw base,
       ParcelRun& r = runs[i];
       const double phi = r.solids_fraction;
       g[i] = law.beta_p(phi, r.slip_m_s) * r.slip_m_s;
-      g_se[i] = g[i] * r.slip_se_m_s / r.slip_m_s;  // d ln(beta s)/d ln s ~ 1 at Re_p ~ 1
+      // the error of g from the slip's: a central difference (d ln(beta s)/d ln s > 1 once beta grows with Re_p)
+      const double sp = r.slip_m_s + r.slip_se_m_s, sm = std::max(r.slip_m_s - r.slip_se_m_s, 0.0);
+      g_se[i] = std::abs(law.beta_p(phi, sp) * sp - law.beta_p(phi, sm) * sm) * r.slip_se_m_s / (sp - sm);
       r.factor = g[i] / (law.beta_p(phi, r.reference_m_s) * r.reference_m_s);
       r.factor_se = r.factor * std::hypot(r.slip_se_m_s / r.slip_m_s, r.reference_se_m_s / r.reference_m_s);
     }

@@ -134,7 +134,9 @@ TEST(ParcelFit, LeavesCcorrAtOneWhenTheDataCannotResolveIt) {
     const ParcelFitResult r = fit_parcel_correction(synthetic(0.0, 0.02, seed), DragLaw::Beetstra, p, 300, seed);
     holds_zero += r.k_low <= 0 && 0 <= r.k_high;
     not_applied += !r.applied;
-    if (r.k_low <= 0 && 0 <= r.k_high && !r.a_fitted) EXPECT_FALSE(r.applied) << r.decision;
+    if (r.k_low <= 0 && 0 <= r.k_high && !r.a_fitted) {
+      EXPECT_FALSE(r.applied) << r.decision;
+    }
   }
   EXPECT_GE(holds_zero, 8);
   EXPECT_GE(not_applied, 8);
