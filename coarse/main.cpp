@@ -68,7 +68,7 @@ int main(int argc, char** argv) {
   for (int i = 1; i < argc; ++i) summarise = summarise || std::string(argv[i]) == "--summarise";
   const int status = cgd::run_tool([&] {
     if (summarise) return summarise_main(argc, argv);
-    std::string reference, model;
+    std::string reference, model, summarise_dir;  // summarise_dir: only for --help (the mode is chosen above)
     int batches = 10;
     const cgd::RunOptions options = cgd::parse_run_command_line(
         argc, argv, "cgd-coarse",
@@ -79,6 +79,11 @@ int main(int argc, char** argv) {
                                            "--set fluid.drag_model=MODEL.h5");
           app.add_option("--reference", reference, "resolved run directory (cgd-generate) to compare the slip with");
           app.add_option("--batches", batches, "batches of the standard error of the mean slip (default 10)");
+          app.add_option("--summarise", summarise_dir,
+                         "instead of running: the slip summary of a finished run (resolved or coarse) over a window, "
+                         "as a coarse_summary file: cgd-coarse --summarise RUN_DIR [--from-tref T] [--ranks N] "
+                         "[--batches N] -o FILE [--force] (cgd-coarse --summarise X --help)")
+              ->type_name("RUN_DIR");
         });
     int ranks = 1;
     MPI_Comm_size(MPI_COMM_WORLD, &ranks);
