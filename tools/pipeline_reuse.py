@@ -40,7 +40,7 @@ def link(raw, out, label, model):
         f.attrs["label"] = label
         f.attrs["reused_from"] = raw
         f.attrs["reused_model"] = model
-    rel = os.path.relpath(os.path.abspath(raw), os.path.abspath(os.path.dirname(out.rstrip("/")) or "."))
+    rel = os.path.relpath(os.path.abspath(raw), os.path.abspath(out))  # the links live in DIR (DIR.tmp is renamed)
     for name in sorted(os.listdir(raw)):
         if name not in ("summary.h5", "DONE"):
             os.symlink(os.path.join(rel, name), os.path.join(tmp, name))
