@@ -10,13 +10,65 @@
 #include "coarse/coarse.hpp"
 #include "core/cli.hpp"
 #include "core/error.hpp"
+#include "core/h5.hpp"
 #include "core/scene.hpp"
 #include "sim/run.hpp"
 
+namespace {
+
+// cgd-coarse --summarise RUN_DIR -o FILE: the slip summary of a finished run (a resolved run of cgd-generate or a
+// coarse run) over a window chosen here, written as a coarse_summary file, by the code that summarises every
+// coarse run (coarse::summarise_run: the mean, its batch-means error, the drift between the window's halves,
+// the cost). Nothing is simulated. Makefile.pipeline uses it for the resolved references of the study.
+int summarise_main(int argc, char** argv) {
+  std::string run_dir, output;
+  double from_tref = -1;
+  int ranks = 0, batches = 10;
+  bool force = false;
+  CLI::App app{"cgd-coarse --summarise: the time-averaged slip of a finished run (resolved or coarse) over a window, "
+               "its batch-means error, the drift between the window's halves and the cost, as a coarse_summary file",
+               "cgd-coarse"};
+  app.add_option("--summarise", run_dir, "run directory (with scene.toml and series.h5)")->required()->type_name("RUN_DIR");
+  app.add_option("--from-tref", from_tref, "start of the window in t_ref (default: the run's run.sampling_start)");
+  app.add_option("--ranks", ranks, "ranks the run used, for the cost (default: the checkpoint's `ranks`, else 1)");
+  app.add_option("--batches", batches, "batches of the standard error (default 10)");
+  app.add_option("-o,--output", output, "summary file to write (cgd_format coarse_summary)")->required()->type_name("FILE");
+  app.add_flag("--force", force, "overwrite FILE if it exists");
+  cgd::parse_command_line(app, argc, argv, "cgd-coarse");
+  const std::filesystem::path dir(run_dir);
+  if (!std::filesystem::exists(dir / "scene.toml") || !std::filesystem::exists(dir / "series.h5"))
+    throw cgd::InputError("--summarise " + run_dir + ": no scene.toml and series.h5 there (expected a run directory)");
+  if (batches < 2) throw cgd::InputError("--batches: " + std::to_string(batches) + " is not allowed (>= 2)");
+  if (std::filesystem::exists(output) && !force)
+    throw cgd::InputError("-o " + output + ": the file exists (give --force to overwrite it)");
+  const cgd::Scene scene = cgd::load_scene((dir / "scene.toml").string(), {});
+  if (!scene.fluid) throw cgd::InputError("--summarise " + run_dir + ": the run solved no fluid: it has no slip to summarise");
+  if (ranks <= 0) {
+    ranks = 1;
+    const std::filesystem::path checkpoint = dir / "checkpoint.h5";
+    if (std::filesystem::exists(checkpoint)) {
+      cgd::h5::File c = cgd::h5::File::open_read(checkpoint.string(), MPI_COMM_SELF);
+      if (c.has_attr("/", "ranks")) ranks = static_cast<int>(c.attr_int("/", "ranks"));
+    }
+  }
+  const double start = from_tref >= 0 ? from_tref * scene.derived.t_ref_s : scene.run.sampling_start_s;
+  const auto s = cgd::coarse::summarise_run(run_dir, scene.derived.u_t_m_s, start, ranks, batches);
+  std::string drag = to_string(scene.fluid->drag);
+  if (scene.fluid->drag == cgd::DragLaw::Model && !scene.fluid->parcel_correction) drag = "model-raw";
+  if (cgd::is_output_rank()) cgd::coarse::write_summary(output, scene, s, std::nullopt, drag);
+  std::cout << "cgd-coarse: " << run_dir << ": " << cgd::coarse::describe(s) << "\nwrote " << output << "\n";
+  return cgd::kExitOk;
+}
+
+}  // namespace
+
 int main(int argc, char** argv) {
   MPI_Init(&argc, &argv);
+  bool summarise = false;
+  for (int i = 1; i < argc; ++i) summarise = summarise || std::string(argv[i]) == "--summarise";
   const int status = cgd::run_tool([&] {
-    std::string reference, model;
+    if (summarise) return summarise_main(argc, argv);
+    std::string reference, model, summarise_dir;  // summarise_dir: only for --help (the mode is chosen above)
     int batches = 10;
     const cgd::RunOptions options = cgd::parse_run_command_line(
         argc, argv, "cgd-coarse",
@@ -27,6 +79,11 @@ int main(int argc, char** argv) {
                                            "--set fluid.drag_model=MODEL.h5");
           app.add_option("--reference", reference, "resolved run directory (cgd-generate) to compare the slip with");
           app.add_option("--batches", batches, "batches of the standard error of the mean slip (default 10)");
+          app.add_option("--summarise", summarise_dir,
+                         "instead of running: the slip summary of a finished run (resolved or coarse) over a window, "
+                         "as a coarse_summary file: cgd-coarse --summarise RUN_DIR [--from-tref T] [--ranks N] "
+                         "[--batches N] -o FILE [--force] (cgd-coarse --summarise X --help)")
+              ->type_name("RUN_DIR");
         });
     int ranks = 1;
     MPI_Comm_size(MPI_COMM_WORLD, &ranks);

@@ -4,7 +4,9 @@
 #  * a run stopped half-way and continued with --restart (end time extended) equals an uninterrupted
 #    run bit for bit at 1 rank;
 #  * --reference writes summary.h5 with the slip, its error and the cost; --model sets the model;
-#  * refusals (exit 2, nothing written): a parcel wider than a cell, too few parcels, an empty window.
+#  * refusals (exit 2, nothing written): a parcel wider than a cell, too few parcels, an empty window;
+#  * --summarise RUN_DIR over the reference's own window gives the reference values a coarse run stored, and the
+#    drift of its halves; over a later window (--from-tref) another window; refuses an existing -o, a non-run.
 # Environment (set by CTest): CGD_SOURCE_DIR, CGD_BINARY_DIR.
 set -u
 source_dir=${CGD_SOURCE_DIR:-$(cd "$(dirname "$0")/../.." && pwd)}
@@ -45,6 +47,24 @@ grep -q "relative error" "$tmp/c.out" && "$py" -c "
 import h5py; a = h5py.File('$tmp/coarse/summary.h5').attrs
 assert a['cgd_format'] == 'coarse_summary' and abs(a['relative_error']) < 1e-12 and a['core_seconds_per_simulated_second'] > 0
 " && echo "ok   summary.h5 with the slip, the error against the reference (0 for the same run) and the cost" || fail "summary"
+
+# --summarise: the same code path as --reference: over the reference scene's window (0.25 t_ref, the default)
+# the values equal those the coarse run stored; --from-tref 0.5 starts the window there
+"$coarse" --summarise "$tmp/gen" -o "$tmp/gen_summary.h5" >"$tmp/s.out" 2>&1 || { cat "$tmp/s.out"; fail "--summarise"; }
+"$coarse" --summarise "$tmp/gen" --from-tref 0.5 -o "$tmp/gen_late.h5" >/dev/null 2>&1 || fail "--summarise --from-tref"
+"$py" -c "
+import h5py
+c = h5py.File('$tmp/coarse/summary.h5').attrs; s = h5py.File('$tmp/gen_summary.h5').attrs; l = h5py.File('$tmp/gen_late.h5').attrs
+assert s['cgd_format'] == 'coarse_summary' and s['slip_over_ut'] == c['reference_slip_over_ut'], (s['slip_over_ut'], c['reference_slip_over_ut'])
+assert s['slip_stderr'] == c['reference_slip_stderr'] and s['window_start_s'] == c['reference_window_start_s']
+assert 'drift_over_ut' in s and 'stationary' in s and s['core_seconds_per_simulated_second'] > 0
+assert abs(l['window_start_s'] / s['window_start_s'] - 2) < 1e-9, (l['window_start_s'], s['window_start_s'])
+" && echo "ok   --summarise: the reference values of --reference, bit for bit, with the drift; --from-tref moves the window" ||
+  fail "--summarise values"
+"$coarse" --summarise "$tmp/gen" -o "$tmp/gen_summary.h5" >/dev/null 2>"$tmp/err"; st=$?
+[ $st -eq 2 ] && grep -q "exists" "$tmp/err" && echo "ok   --summarise: an existing -o is refused (exit 2)" || fail "--summarise over an existing file: $st"
+"$coarse" --summarise "$tmp" -o "$tmp/nothing.h5" >/dev/null 2>"$tmp/err"; st=$?
+[ $st -eq 2 ] && [ ! -e "$tmp/nothing.h5" ] && echo "ok   --summarise: a directory that is no run is refused (exit 2)" || fail "--summarise of a non-run: $st"
 
 # restart: half, then continue to the end, against the uninterrupted run
 "$coarse" "$scene" "${small[@]}" --set particles.parcel_size=2 --set run.end_time_tref=0.5 -o "$tmp/half" >/dev/null 2>&1 || fail "half run"
