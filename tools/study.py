@@ -39,8 +39,9 @@ def text(v):
     return v.decode() if isinstance(v, bytes) else str(v)
 
 
-def read_summary(path, kind, run):
-    """One run's row from a coarse_summary file (cgd-coarse, or cgd-coarse --summarise for a resolved run)."""
+def read_summary(path, kind, run, label_by="auto"):
+    """One run's row from a coarse_summary file (cgd-coarse, or cgd-coarse --summarise for a resolved run).
+    label_by "dir": the run directory's name is the label (every run its own configuration)."""
     try:
         f = h5py.File(path, "r")
     except OSError as e:
@@ -54,6 +55,8 @@ def read_summary(path, kind, run):
         drag = text(a["drag"])
         m = LABEL_RE.search(os.path.basename(os.path.normpath(run)))
         label = text(a["label"]) if "label" in a else (m.group(1) if m else ("modelraw" if drag == "model-raw" else drag))
+        if label_by == "dir":
+            label = os.path.basename(os.path.normpath(run))
         seed = int(p["seed"]) if "seed" in p else (int(m.group(2)) if m else 1)
         get = lambda k, d=np.nan: float(a[k]) if k in a else d
         return dict(run=run, kind=kind, phi=float(p["solids_fraction"]), cell_over_dp=float(a["cell_over_dp"]),
@@ -98,6 +101,9 @@ def main():
     ap.add_argument("--resolved", nargs="+", default=[], help="slip summaries of the resolved runs (cgd-coarse --summarise)")
     ap.add_argument("--bootstrap", type=int, default=4000, help="replicates of the rms error's interval (default 4000)")
     ap.add_argument("--seed", type=int, default=1, help="seed of the bootstrap (default 1)")
+    ap.add_argument("--label-by", choices=["auto", "dir"], default="auto",
+                    help="auto (default): the summary's label, the pipeline's ..._<label>_s<seed> name, or the law; "
+                         "dir: each coarse run directory's name (every run its own configuration: study-resolved)")
     ap.add_argument("-o", "--output", required=True, help="output stem: STEM.csv, STEM_runs.csv, STEM.h5, STEM.png")
     a = ap.parse_args()
     if a.bootstrap < 100:
@@ -107,7 +113,7 @@ def main():
             fail(f"--resolved {r} is a run directory; give its slip summary (cgd-coarse --summarise {r} "
                      f"--from-tref T -o FILE.h5), as Makefile.pipeline does")
     resolved = [read_summary(r, "resolved", r) for r in a.resolved]
-    coarse = [read_summary(os.path.join(r, "summary.h5"), "coarse", r) for r in a.coarse]
+    coarse = [read_summary(os.path.join(r, "summary.h5"), "coarse", r, a.label_by) for r in a.coarse]
     for r in resolved:  # a resolved run is its own drag law on its own grid
         r["drag"], r["alpha"] = "resolved", 1.0
 

@@ -27,7 +27,7 @@ grep -qxF -- "$cmd_s2" <<<"$n" && ok "half: the second resolved realisation at 0
 grep -q -- "cgd-filter $tmp/out/generate/phi0.02 $tmp/out/generate/phi0.05 $tmp/out/generate/phi0.10 $tmp/out/generate/phi0.05_s2 --from-tref 20 " <<<"$n" &&
   grep -q -- "--grids 12,8,6,5,4,3 --force" <<<"$n" && ok "half: the filter pools both seeds at 0.05, --from-tref 20, --grids 12,8,6,5,4,3" ||
   fail "half: filter command"
-grep -q -- "cgd-fit $tmp/out/filter/filtered.h5 --min-width-over-cell 1.5 --width-exponent fit --operator grid -o $tmp/out/fit/model.h5" <<<"$n" &&
+grep -q -- "cgd-fit $tmp/out/filter/filtered.h5 --width-exponent fit --operator grid -o $tmp/out/fit/model.h5" <<<"$n" &&
   ok "half: the fit on the grid operator" || fail "half: fit command"
 for c in 8 4; do
   grep -q -- "cgd-fit $tmp/out/filter/filtered.h5 --grid-table $c -o $tmp/out/fit/perfect_c$c.h5" <<<"$n" || fail "half: no perfect_c$c.h5"
@@ -59,6 +59,11 @@ n=$(mk PROFILE=demo all)
 grep -q -- "--grids 6,5,4,3" <<<"$n" && ! grep -q "_s2/DONE\|phi0.05_s2 " <<<"$(grep generate <<<"$n")" &&
   ok "demo: --grids 6,5,4,3, no extra resolved run" || fail "demo: filter grids / extra resolved"
 grep -q "phi0.10_c4_a3_perfect_s3" <<<"$n" && ok "demo: perfect closure at every alpha with SEEDS=1,2,3" || fail "demo: perfect runs"
+n=$(mk PROFILE=demo PHIS=0.05 all); s=$?
+[ $s -eq 0 ] && grep -q "coarse/phi0.05_c4_a1_model_s1 " <<<"$n" && ok "demo PHIS=0.05: its alpha = 1 runs follow (ALPHA1_PHIS defaults to PHIS without 0.10)" ||
+  fail "demo PHIS=0.05: status $s"
+n=$(mk PROFILE=demo all)
+! grep -q "coarse/phi0.10_c4_a1_" <<<"$n" && ok "demo: no alpha = 1 run at 0.10" || fail "demo: an alpha = 1 run at 0.10"
 h=$(make -f Makefile.pipeline help OUT="$tmp/out" PROFILE=half 2>&1)
 for v in SEEDS=1,2,3 ALPHA1_SEEDS=1 EXTRA_RESOLVED=0.05_s2 FILTER_GRIDS=12,8,6,5,4,3 PARCEL_FIT=1 COARSE_DRAGS=micro,model,radl2014,perfect; do
   grep -qF -- "$v" <<<"$h" || fail "make help lacks $v"
