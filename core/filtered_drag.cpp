@@ -147,7 +147,7 @@ std::vector<std::string> model_calibration_warnings(const DragModel& m, double d
   if (m.calibration_operator == "box") {
     out.push_back(m.path + " was calibrated with the particle-centred box filter (operator = \"box\"), but this run "
                   "sees phi, u and grad p through its grid's TSC deposit and interpolation, which filters like a box of "
-                  "about 2.45 cells; its Delta = " + number(delta_m / d) + " d_p means a different filter than in the "
+                  "1.8-2.45 cells (docs/filter.md); its Delta = " + number(delta_m / d) + " d_p means a different filter than in the "
                   "calibration. Calibrate on the coarse grids' operator: cgd-filter --grids, cgd-fit --operator grid "
                   "(docs/fit.md)");
     return out;

@@ -23,6 +23,11 @@
 //     smoothing parameters of the main fit; 95 % percentile bands of h, a and H(F, phi);
 //  4. checks: leave-one-run-out cross-validation of H, residuals per width (of the per-bin fits: does
 //     1/(1 + a F) describe the width dependence?), the whole-box filter as an out-of-sample check.
+// The data are the box widths (operator "box") or the coarse grids' H_grid with Delta = the grid's cell
+// size (operator "grid": filtered_input.hpp select_operator; docs/fit.md "The coarse grid's operator").
+// Low phi (docs/fit.md "Low phi"): a bin's a is bounded by a F^n <= 10 at its widest width (beyond it only
+// h/a is identified), and the model's a(phi) is clipped to the range of the bins' log a (log_a_min/max).
+// The perfect-closure table (write_grid_table_model) is H_grid of one grid, piecewise linear in phi.
 #include <cstdint>
 #include <iosfwd>
 #include <string>

@@ -68,9 +68,11 @@ void write_model_file(const std::string& path, const FitResult& R, const std::ve
       across.erase(std::unique(across.begin(), across.end()), across.end());
       std::vector<double> over_dp;
       for (double x : delta) over_dp.push_back(x / M.diameter_m);
-      f.set_attr("/", "calibrated_delta_m", delta);
-      f.set_attr("/", "calibrated_delta_over_dp", over_dp);
-      if (grid) f.set_attr("/", "calibrated_cells_across", across);
+      if (!delta.empty()) {
+        f.set_attr("/", "calibrated_delta_m", delta);
+        f.set_attr("/", "calibrated_delta_over_dp", over_dp);
+      }
+      if (grid && !across.empty()) f.set_attr("/", "calibrated_cells_across", across);
     }
     f.set_attr("/", "base_drag", std::string(to_string(M.base_law)));
     f.set_attr("/", "u_t_convention", M.u_t_convention);

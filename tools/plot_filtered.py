@@ -102,6 +102,26 @@ def main():
             else:
                 cells.append(f"{'-':>26}")
         print(f"{G.attrs['width_over_dp']:9.2f} {F:6.3f} " + " ".join(cells))
+    # the coarse grids' operator (cgd-filter --grids): H_grid per grid, its equivalent box width; drawn dotted
+    if "grids" in f:
+        print(f"coarse grids (TSC deposit + interpolation; docs/filter.md): H_grid, equivalent box width")
+        print(f"{'grid':>9} {'cell/d_p':>8} {'F':>6} {'equiv/d_p':>9} {'/cell':>6} " +
+              " ".join(f"{'phi=' + str(p):>17}" for p in table_phi))
+        for k, n in enumerate(f["grids"].attrs["cells_across"]):
+            G = f[f"grids/{n}"]
+            c, phi, H, lo, hi = G["count"][:], G["phi_mean"][:], G["H"][:], G["H_low"][:], G["H_high"][:]
+            m = c >= a.min_count
+            ax.plot(phi[m], H[m], "x:", ms=4, color=colors[(k + 3) % len(colors)],
+                    label=f"grid {n} across (cell {G.attrs['cell_size_over_dp']:.2f} d_p)")
+            cells = []
+            for p in table_phi:
+                b = min(int(np.floor(p / f["bins"].attrs["width"])), len(c) - 1)
+                cells.append(f"{H[b]:6.3f} [{lo[b]:5.2f},{hi[b]:5.2f}]" if c[b] >= a.min_count else f"{'-':>17}")
+            eq = G.attrs["equivalent_width_over_dp"]
+            eqc = G.attrs["equivalent_width_over_grid_cell"]
+            flag = "*" if G.attrs["equivalent_width_at_bound"] else " "
+            print(f"{n:>9} {G.attrs['cell_size_over_dp']:8.2f} {G.attrs['F']:6.3f} {eq:8.2f}{flag} {eqc:6.2f} " + " ".join(cells))
+        print("  (* the equivalent width is the end of the box widths filtered: a bound)")
     if plt is None:
         return
     ax.axhline(0, color="k", lw=0.5)

@@ -28,7 +28,7 @@ small=(--set 'domain.size_dp=[20,80,20]' --set run.end_time_tref=1.5 --set run.d
 "$generate" "$scene" "${small[@]}" --set particles.solids_fraction=0.08 -o "$tmp/runB" >/dev/null 2>&1 || { fail "generate runB"; exit 1; }
 
 # ---- one run, one rank -----------------------------------------------------------------------------
-"$filter" "$tmp/runA" --from-tref 0.5 --samples 50 --grids 6,3 -o "$tmp/a.h5" >"$tmp/a.out" 2>"$tmp/a.err" || { cat "$tmp/a.err"; fail "filter runA"; }
+"$filter" "$tmp/runA" --from-tref 0.5 --samples 50 --grids 6,5,4,3 -o "$tmp/a.h5" >"$tmp/a.out" 2>"$tmp/a.err" || { cat "$tmp/a.err"; fail "filter runA"; }
 grep -q "^grid 3 across (3 x 12 x 3 cells" "$tmp/a.out" || fail "grid report: $(cat "$tmp/a.out")"
 "$py" - "$tmp/a.h5" "$tmp/runA/series.h5" <<'PY' || fail "whole-box slip / homogeneous H"
 import sys, h5py, numpy as np
@@ -58,7 +58,7 @@ m = own["count"][:] > 0
 assert m.sum() >= 3 and np.all(abs(own["H"][m]) < 1e-11), own["H"][m]
 ps = own["per_snapshot"]; mm = ps["count"][:] > 0
 assert np.all(abs(1 - ps["numerator"][:][mm] / ps["micro"][:][mm]) < 1e-11)
-assert list(f["grids"].attrs["cells_across"]) == [6, 3] and list(f["grids/3"].attrs["cells"]) == [3, 12, 3]
+assert list(f["grids"].attrs["cells_across"]) == [6, 5, 4, 3] and list(f["grids/3"].attrs["cells"]) == [3, 12, 3]
 assert np.isfinite(f["grids/3"].attrs["equivalent_width_m"]) or f["grids/3"].attrs["equivalent_width_bins"] == 0
 print(f"ok   own grid: |H_grid| = {abs(own['H'][m]).max():.1e} in {m.sum()} bins")
 for g in [k for k in f if k.startswith("width_")] + ["whole_box", "grids/3"]:
@@ -71,6 +71,27 @@ for g in [k for k in f if k.startswith("width_")] + ["whole_box", "grids/3"]:
     assert f[g]["samples/phi"].shape == (50,)
 print("ok   homogeneous suspension: |H| < 0.03 in the bulk bins, < 0.06 in the tails, at every width")
 PY
+
+# ---- cgd-fit --grid-table 4 writes the perfect-closure table, whose model (order-2 B-spline = piecewise
+# linear) returns the table's H at its points (1e-12). (--operator grid needs >= 4 phi bins at 3 grids:
+# this homogeneous run fills 2; the fit on grids is tested in test_closure_fit.cpp.)
+fit=$binary_dir/cgd-fit
+if [ -x "$fit" ]; then
+  "$fit" "$tmp/a.h5" --grid-table 4 -o "$tmp/perfect.h5" >"$tmp/fit.out" 2>&1 || fail "cgd-fit --grid-table: $(cat "$tmp/fit.out")"
+  "$py" - "$tmp/a.h5" "$tmp/perfect.h5" <<'PY' || fail "grid-table model"
+import sys, h5py, numpy as np
+a, m = h5py.File(sys.argv[1]), h5py.File(sys.argv[2])
+assert m.attrs["curves"] == "table" and m.attrs["operator"] == "tsc-grid" and m.attrs["table_cells_across"] == 4
+grid = a["grids/4"]
+ok = grid["count"][:] >= 100
+assert np.allclose(m["table/phi"][:], grid["phi_mean"][ok], rtol=0, atol=1e-15)
+assert np.allclose(m["table/H"][:], grid["H"][ok], rtol=0, atol=1e-12)
+t, c = m["h/knots"][:], m["h/coefficients"][:]
+assert m["h"].attrs["order"] == 2 and np.allclose(np.interp(m["table/phi"][:], t[1:-1], c), grid["H"][ok], atol=1e-12)
+assert abs(m.attrs["calibrated_delta_over_dp"][0] - grid.attrs["cell_size_over_dp"]) < 1e-12
+print(f"ok   perfect-closure table of the 4-across grid ({ok.sum()} points)")
+PY
+fi
 
 # ---- two runs pooled, 1 rank vs 2 ranks: the same file --------------------------------------------
 "$filter" "$tmp/runA" "$tmp/runB" --samples 20 --grids 3,4 --quiet -o "$tmp/np1.h5" || fail "filter 2 runs np1"

@@ -53,6 +53,9 @@ expect_bad too-few-bins        "$tmp/three_bins.h5" "too few phi bins"          
 expect_bad bad-option          "--min-widths"                                    -- "$tmp/good.h5" --min-widths 2
 expect_bad bad-width-exponent  "--width-exponent two" "(0, 10]" "fit"          -- "$tmp/good.h5" --width-exponent two
 expect_bad zero-width-exponent "--width-exponent 0" "(0, 10]"                    -- "$tmp/good.h5" --width-exponent 0
+expect_bad operator-no-grids   "$tmp/good.h5" "/grids" "cgd-filter --grids"      -- "$tmp/good.h5" --operator grid
+expect_bad operator-unknown    "--operator tent" "box" "grid"                    -- "$tmp/good.h5" --operator tent
+expect_bad grid-table-no-grid  "$tmp/good.h5" "--grid-table 4" "/grids/4"        -- "$tmp/good.h5" --grid-table 4
 # the model file's directory does not exist: refused before the fit
 status=0; "$fit" "$tmp/good.h5" -o "$tmp/no/such/dir/model.h5" >"$tmp/stdout" 2>"$tmp/stderr" || status=$?
 if [ $status -eq 2 ] && grep -qF "$tmp/no/such/dir" "$tmp/stderr" && [ ! -e "$tmp/no" ]; then

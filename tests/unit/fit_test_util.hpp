@@ -4,6 +4,7 @@
 // docs/schema-filtered.md through core/h5.hpp.
 #include <cmath>
 #include <cstdint>
+#include <functional>
 #include <random>
 #include <string>
 #include <vector>
@@ -32,6 +33,8 @@ struct SyntheticSpec {
   std::uint64_t seed = 1;
   std::string micro_drag = "beetstra";
   double diameter_m = 75e-6;
+  std::function<double(double phi, double F)> truth;  // H(phi, F); empty: truth_h/(1 + truth_a F)
+  std::vector<double> noise_scale;                    // per width (F order; whole box last); empty: all 1
 };
 
 /// Per (run, snapshot, width, bin): micro = count * beta0, numerator = micro (1 - H_true - e), with
@@ -84,13 +87,14 @@ inline FilteredFile make_synthetic(const SyntheticSpec& s) {
     ws.snapshot_count.assign(static_cast<std::size_t>(ns * nb), s.count);
     for (int b = 0; b < nb; ++b) {
       const double phi = 0.5 * (f.phi_edges[b] + f.phi_edges[b + 1]);
-      const double H_true = truth_h(phi) / (1 + truth_a(phi) * Fs[w]);
+      const double H_true = s.truth ? s.truth(phi, Fs[w]) : truth_h(phi) / (1 + truth_a(phi) * Fs[w]);
+      const double noise = s.noise * (s.noise_scale.empty() ? 1.0 : s.noise_scale.at(w));
       double num = 0, micro = 0;
       std::vector<double> block_num(static_cast<std::size_t>(s.runs * blocks_per_run)),
           block_micro(block_num.size());
       for (int k = 0; k < ns; ++k) {
         const std::size_t i = static_cast<std::size_t>(k * nb + b);
-        const double e = s.noise * (0.6 * common[i] + 0.8 * own[i]);
+        const double e = noise * (0.6 * common[i] + 0.8 * own[i]);
         ws.numerator[i] = ws.micro[i] * (1 - H_true - e);
         num += ws.numerator[i];
         micro += ws.micro[i];
