@@ -326,10 +326,12 @@ std::string write_grid_table_model(const std::string& path, const std::vector<Fi
     write_vector(f, "/table/count", n);
     f.set_attr("/table", "source_group", group);
     f.set_attr("/table", "min_count", min_count);
+    // c_corr = 1 (a = 1, k = 0): the table is the grid's a-priori closure alone; what parcels miss is measured
+    // against it, not folded into it
     f.create_group("/c_corr");
-    f.set_attr("/c_corr", "a", Radl2014Curves::kCcorrA);
-    f.set_attr("/c_corr", "k", Radl2014Curves::kCcorrK);
-    f.set_attr("/c_corr", "source", std::string("paper"));
+    f.set_attr("/c_corr", "a", 1.0);
+    f.set_attr("/c_corr", "k", 0.0);
+    f.set_attr("/c_corr", "source", std::string("none"));
     f.set_attr("/c_corr", "fitted", std::int64_t{0});
     f.set_attr("/c_corr", "formula", std::string("c_corr = a + (1 - a) exp(-k (alpha - 1))"));
     f.create_group("/sources");

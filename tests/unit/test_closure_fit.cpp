@@ -203,6 +203,12 @@ TEST(GridTable, ModelReproducesTheTableAtItsPointsAndAppliesIt) {
                          cgd::beta_p(cgd::DragLaw::Beetstra, air, setup, phi, 0.1);
     EXPECT_NEAR(ratio, 1.0 - grid.H[5], 1e-12);
   }
+  // c_corr = 1: parcels get the grid's closure alone (the paper's k = 0.05 would give 0.905 at alpha = 3)
+  setup.filter_width_m = delta;
+  setup.parcel_size = 3;
+  EXPECT_NEAR(cgd::beta_p(cgd::DragLaw::Model, air, setup, grid.phi_mean[5], 0.1) /
+                  cgd::beta_p(cgd::DragLaw::Beetstra, air, setup, grid.phi_mean[5], 0.1),
+              1.0 - grid.H[5], 1e-12);
   EXPECT_TRUE(cgd::model_calibration_warnings(m, delta).empty());
   EXPECT_EQ(cgd::model_calibration_warnings(m, 1.5 * delta).size(), 1u);
   EXPECT_THROW(cgd::fit::write_grid_table_model((dir / "x.h5").string(), {f}, 77, 100, scene), cgd::InputError);
