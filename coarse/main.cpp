@@ -39,8 +39,7 @@ int summarise_main(int argc, char** argv) {
   if (!std::filesystem::exists(dir / "scene.toml") || !std::filesystem::exists(dir / "series.h5"))
     throw cgd::InputError("--summarise " + run_dir + ": no scene.toml and series.h5 there (expected a run directory)");
   if (batches < 2) throw cgd::InputError("--batches: " + std::to_string(batches) + " is not allowed (>= 2)");
-  if (std::filesystem::exists(output) && !force)
-    throw cgd::InputError("-o " + output + ": the file exists (give --force to overwrite it)");
+  cgd::check_output_file(output, force);
   const cgd::Scene scene = cgd::load_scene((dir / "scene.toml").string(), {});
   if (!scene.fluid) throw cgd::InputError("--summarise " + run_dir + ": the run solved no fluid: it has no slip to summarise");
   if (ranks <= 0) {

@@ -155,4 +155,16 @@ int run_tool(const std::function<int()>& body) {
   }
 }
 
+void check_output_file(const std::string& output, bool force, const std::vector<std::string>& inputs) {
+  namespace fs = std::filesystem;
+  std::error_code ec;
+  for (const std::string& in : inputs)
+    if (fs::exists(output, ec) && fs::equivalent(output, in, ec))
+      throw InputError("-o " + output + ": it is one of the inputs (" + in + "); a tool never writes over its own input, "
+                       "even with --force: give another output path");
+  if (fs::is_directory(output, ec)) throw InputError("-o " + output + ": the output path is a directory");
+  if (fs::exists(output, ec) && !force)
+    throw InputError("-o " + output + ": the output file exists (give --force to overwrite it)");
+}
+
 }  // namespace cgd

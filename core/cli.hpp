@@ -69,6 +69,11 @@ RunOptions parse_run_command_line(int argc, char** argv, const std::string& tool
 /// parses; a bad option, --help or --version throws CommandLineExit.
 void parse_command_line(CLI::App& app, int argc, char** argv, const std::string& tool_name);
 
+/// The one check of an output file a tool is about to write (cgd-filter, cgd-fit, cgd-coarse --summarise): refused
+/// (InputError, exit 2) when it is one of the tool's own inputs (even with --force: a tool never writes over what it
+/// reads), when it exists and `force` is false, or when it is a directory.
+void check_output_file(const std::string& output, bool force, const std::vector<std::string>& inputs = {});
+
 /// "out/<stage>/<scene stem>", e.g. default_run_directory("generate", "data/scenes/dry_settling.toml").
 std::string default_run_directory(const std::string& stage, const std::string& scene_path);
 

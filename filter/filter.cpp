@@ -8,6 +8,7 @@
 #include <queue>
 #include <sstream>
 
+#include "core/cli.hpp"
 #include "core/drag.hpp"
 #include "core/error.hpp"
 #include "core/scene.hpp"
@@ -156,12 +157,7 @@ FilterPlan plan_filter(const FilterOptions& o) {
   if (o.bootstrap_replicates < 20)
     throw InputError("--bootstrap: " + std::to_string(o.bootstrap_replicates) +
                      " replicates is not allowed (>= 20; 1000 for a 95 % interval)");
-  {
-    std::error_code ec;
-    if (fs::exists(o.output_path, ec) && !o.force)
-      throw InputError(o.output_path + ": the output file exists (use --force to overwrite it)");
-    if (fs::is_directory(o.output_path, ec)) throw InputError(o.output_path + ": the output path is a directory");
-  }
+  check_output_file(o.output_path, o.force);
 
   for (const std::string& dir : o.run_dirs) {
     RunPlan run;

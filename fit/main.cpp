@@ -59,6 +59,8 @@ int main(int argc, char** argv) {
         "--no-cross-validation", [&](std::int64_t) { options.cross_validate = false; },
         "Skip the leave-one-run-out cross-validation");
     app.add_flag("--quiet", quiet, "Print no report");
+    bool force = false;
+    app.add_flag("--force", force, "Overwrite an existing output file (never one of the inputs)");
     std::string op = "box";
     app.add_option("--operator", op,
                    "What the model is calibrated on: \"box\" (the box widths /width_<k>, default) or \"grid\" (H_grid "
@@ -93,6 +95,14 @@ int main(int argc, char** argv) {
       options.width_exponent = n;
     }
 
+    {
+      std::vector<std::string> read = inputs;
+      if (!parcel_model.empty()) read.push_back(parcel_model);
+      cgd::check_output_file(output, force, read);
+      const std::filesystem::path dir = std::filesystem::absolute(output).parent_path();
+      if (!std::filesystem::is_directory(dir))
+        throw cgd::InputError(output + ": cannot write the model file: no directory " + dir.string());
+    }
     if (!parcel_model.empty()) {
       if (width_exponent != "1")
         throw cgd::InputError("cgd-fit: --width-exponent " + width_exponent +
@@ -122,9 +132,6 @@ int main(int argc, char** argv) {
     if (app.count("--grid-table")) {
       const cgd::Scene table_scene =
           cgd::load_scene_from_string(files.front().scene_toml, files.front().path + " (scene)");
-      const std::filesystem::path dir = std::filesystem::absolute(output).parent_path();
-      if (!std::filesystem::is_directory(dir))
-        throw cgd::InputError(output + ": cannot write the model file: no directory " + dir.string());
       const std::string report =
           cgd::fit::write_grid_table_model(output, files, grid_table, options.min_count, table_scene);
       if (!quiet) std::cout << report << "wrote " << output << "\n";
@@ -133,9 +140,6 @@ int main(int argc, char** argv) {
     files = cgd::fit::select_operator(files, op);
     const cgd::Scene scene =
         cgd::load_scene_from_string(files.front().scene_toml, files.front().path + " (scene)");
-    const std::filesystem::path parent = std::filesystem::absolute(output).parent_path();
-    if (!std::filesystem::is_directory(parent))
-      throw cgd::InputError(output + ": cannot write the model file: no directory " + parent.string());
     const cgd::fit::FitResult result = cgd::fit::fit_filtered_drag(files, options, nullptr);
     cgd::fit::write_model_file(output, result, files, options, scene);
     if (!quiet) std::cout << cgd::fit::fit_report(result, files, options) << "wrote " << output << "\n";

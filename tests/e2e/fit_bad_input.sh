@@ -71,6 +71,31 @@ if "$fit" "$tmp/good.h5" "$tmp/good2.h5" --bootstrap 50 -o "$tmp/model.h5" >"$tm
 else
   echo "FAIL good-files"; sed 's/^/     /' "$tmp/stderr"; failures=$((failures + 1))
 fi
+# an existing output: refused without --force (exit 2, the file unchanged), replaced with it
+cp "$tmp/model.h5" "$tmp/model_before.h5"
+status=0; "$fit" "$tmp/good.h5" --bootstrap 0 --no-cross-validation --quiet -o "$tmp/model.h5" 2>"$tmp/stderr" || status=$?
+if [ $status -eq 2 ] && grep -qF -- "--force" "$tmp/stderr" && cmp -s "$tmp/model.h5" "$tmp/model_before.h5"; then
+  echo "ok   existing-output: $(head -n 1 "$tmp/stderr" | cut -c1-200)"
+else
+  echo "FAIL existing-output (status $status)"; sed 's/^/     /' "$tmp/stderr"; failures=$((failures + 1))
+fi
+if "$fit" "$tmp/good.h5" --bootstrap 0 --no-cross-validation --quiet --force -o "$tmp/model.h5" 2>"$tmp/stderr" &&
+   ! cmp -s "$tmp/model.h5" "$tmp/model_before.h5"; then
+  echo "ok   existing-output-force"
+else
+  echo "FAIL existing-output-force"; sed 's/^/     /' "$tmp/stderr"; failures=$((failures + 1))
+fi
+# the output is one of the inputs: refused even with --force, the input untouched (it was replaced by a model)
+cp "$tmp/good.h5" "$tmp/good_copy.h5"
+for extra in "" --force; do
+  status=0; "$fit" "$tmp/good_copy.h5" --bootstrap 0 --no-cross-validation --quiet $extra -o "$tmp/good_copy.h5" \
+    2>"$tmp/stderr" || status=$?
+  if [ $status -eq 2 ] && grep -qF "one of the inputs" "$tmp/stderr" && cmp -s "$tmp/good.h5" "$tmp/good_copy.h5"; then
+    echo "ok   output-is-input ${extra:-(no --force)}"
+  else
+    echo "FAIL output-is-input ${extra:-(no --force)} (status $status)"; sed 's/^/     /' "$tmp/stderr"; failures=$((failures + 1))
+  fi
+done
 for flag in --help --version; do
   if "$fit" $flag >"$tmp/stdout" 2>&1 && [ -s "$tmp/stdout" ]; then echo "ok   $flag"
   else echo "FAIL $flag"; failures=$((failures + 1)); fi

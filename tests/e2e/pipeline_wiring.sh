@@ -27,10 +27,10 @@ grep -qxF -- "$cmd_s2" <<<"$n" && ok "half: the second resolved realisation at 0
 grep -q -- "cgd-filter $tmp/out/generate/phi0.02 $tmp/out/generate/phi0.05 $tmp/out/generate/phi0.10 $tmp/out/generate/phi0.05_s2 --from-tref 20 " <<<"$n" &&
   grep -q -- "--grids 12,8,6,5,4,3 --force" <<<"$n" && ok "half: the filter pools both seeds at 0.05, --from-tref 20, --grids 12,8,6,5,4,3" ||
   fail "half: filter command"
-grep -q -- "cgd-fit $tmp/out/filter/filtered.h5 --width-exponent fit --operator grid -o $tmp/out/fit/model.h5" <<<"$n" &&
+grep -q -- "cgd-fit $tmp/out/filter/filtered.h5 --width-exponent fit --operator grid --force -o $tmp/out/fit/model.h5" <<<"$n" &&
   ok "half: the fit on the grid operator" || fail "half: fit command"
 for c in 8 4; do
-  grep -q -- "cgd-fit $tmp/out/filter/filtered.h5 --grid-table $c -o $tmp/out/fit/perfect_c$c.h5" <<<"$n" || fail "half: no perfect_c$c.h5"
+  grep -q -- "cgd-fit $tmp/out/filter/filtered.h5 --grid-table $c --force -o $tmp/out/fit/perfect_c$c.h5" <<<"$n" || fail "half: no perfect_c$c.h5"
 done
 ok "half: one perfect-closure table per coarse grid (cgd-fit --grid-table 8, 4)"
 # realisations: alpha > 1 at seeds 1, 2, 3; alpha = 1 at seed 1 only
