@@ -77,14 +77,10 @@ inline V3 kicked_spin(V3 w, V3 torque, const KernelConstants& k) { return w + (k
 
 /// Pass 1: the force (and torque) on each particle of `rows` (particles with a non-empty list) from its
 /// list, in the list's order, into force[3 i..] (torque[3 i..] with friction). Updates the tangential
-/// histories and the overlap statistics. `reach`: an entry whose gap at the list build (list.gap)
-/// exceeds it cannot touch now and is skipped -- without loading its partner: no particle has moved
-/// more than the displacement bound D since the build, so a pair's gap has shrunk by at most 2 D
-/// (reach = 2 D, widened). A skipped entry is one the full evaluation would find apart, with a zero
-/// history, so the forces and histories are the same bit for bit.
+/// histories and the overlap statistics.
 template <class Contact>
 void compute_forces(const Particles& p, NeighborList& list, const Contact& contact, const KernelConstants& k,
-                    const std::int32_t* rows, std::size_t n_rows, double reach, double* __restrict force,
+                    const std::int32_t* rows, std::size_t n_rows, double* __restrict force,
                     double* __restrict torque_out, KernelStats& st) {
   constexpr bool kFriction = std::is_same_v<Contact, SpringDashpot<true>>;
   const double contact_dist = 2.0 * k.radius, contact_dist2 = contact_dist * contact_dist;
@@ -93,7 +89,6 @@ void compute_forces(const Particles& p, NeighborList& list, const Contact& conta
   const double* __restrict w = kFriction ? p.w.data() : nullptr;
   const std::int64_t* __restrict offset = list.offset.data();
   const std::int32_t* __restrict index = list.index.data();
-  const float* __restrict gap = list.gap.data();
   const std::int64_t n_entries = static_cast<std::int64_t>(list.index.size());
   // prefetch distance in list entries: entries are contiguous over rows (CSR), so the look-ahead runs
   // on into the next particles' lists
@@ -107,13 +102,12 @@ void compute_forces(const Particles& p, NeighborList& list, const Contact& conta
     if constexpr (kFriction) wi = load3(w + 3 * i);
     const std::int64_t k0 = offset[i], k1 = offset[i + 1];
     for (std::int64_t e = k0; e < k1; ++e) {
-      if (e + kAhead < n_entries && gap[e + kAhead] <= reach) {
+      if (e + kAhead < n_entries) {
         const std::int32_t jn = index[e + kAhead];
         __builtin_prefetch(x + 3 * jn);
         __builtin_prefetch(v + 3 * jn);
         if constexpr (kFriction) __builtin_prefetch(w + 3 * jn);
       }
-      if (gap[e] > reach) continue;
       const std::int32_t j = index[e];
       const V3 dx = xi - load3(x + 3 * j);
       const double r2 = dot(dx, dx);

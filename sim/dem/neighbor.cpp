@@ -141,27 +141,8 @@ void NeighborList::load_history(const Particles& p, const ContactStore& store) {
   }
 }
 
-void NeighborList::compute_gaps(const Particles& p, double contact_dist) {
-  gap.resize(index.size());
-  const std::size_t n = offset.empty() ? 0 : offset.size() - 1;
-  for (std::size_t i = 0; i < n; ++i) {
-    const double* xi_ = &p.x[3 * i];
-    for (std::int64_t e = offset[i]; e < offset[i + 1]; ++e) {
-      const double* xj = &p.x[3 * index[e]];
-      const double ddx = xi_[0] - xj[0], ddy = xi_[1] - xj[1], ddz = xi_[2] - xj[2];
-      const double g = std::sqrt(ddx * ddx + ddy * ddy + ddz * ddz) - contact_dist;
-      float f = static_cast<float>(g);
-      if (static_cast<double>(f) > g) f = std::nextafter(f, -std::numeric_limits<float>::infinity());
-      if (!xi.empty() && (xi[3 * e] != 0.0 || xi[3 * e + 1] != 0.0 || xi[3 * e + 2] != 0.0))
-        f = -std::numeric_limits<float>::infinity();
-      gap[static_cast<std::size_t>(e)] = f;
-    }
-  }
-}
-
 std::size_t NeighborList::bytes() const {
   return offset.capacity() * sizeof(std::int64_t) + index.capacity() * sizeof(std::int32_t) +
-         gap.capacity() * sizeof(float) +
          xi.capacity() * sizeof(double) +
          (cell_start_.capacity() + cell_items_.capacity() + cell_of_.capacity()) * sizeof(std::int32_t);
 }

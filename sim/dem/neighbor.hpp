@@ -23,18 +23,12 @@ class NeighborList {
   /// Set each entry's spring from the store (entries whose partner is not in the store get zero).
   void load_history(const Particles& p, const ContactStore& store);
 
-  /// Each entry's gap at the build, |x_i - x_j| - contact_dist, rounded down to float (-inf for an entry
-  /// whose history spring is not zero): the force pass skips the entries whose gap exceeds twice the
-  /// displacement bound (they cannot touch yet, issue 17). Call after load_history.
-  void compute_gaps(const Particles& p, double contact_dist);
-
   std::size_t entries() const { return index.size(); }
   std::size_t bytes() const;
 
   std::vector<std::int64_t> offset;  // n_owned + 1
   std::vector<std::int32_t> index;   // local index of the neighbour
   std::vector<double> xi;            // tangential spring per entry (3 doubles), as seen from i
-  std::vector<float> gap;            // per entry, m (compute_gaps)
 
  private:
   std::vector<std::int32_t> cell_start_, cell_items_, cell_of_;

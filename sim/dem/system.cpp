@@ -3,6 +3,7 @@
 #include <cmath>
 #include <cstring>
 #include <sstream>
+#include <type_traits>
 
 #include "core/error.hpp"
 
@@ -133,7 +134,6 @@ void DemSystem::build_ghosts_and_list() {
   ghosts_.build(p_, cutoff());
   list_.build(p_, cutoff(), p_.rotation);
   if (p_.rotation) list_.load_history(p_, store_);
-  list_.compute_gaps(p_, s_.diameter_m);
   list_valid_ = true;
   classify(&list_);
 }
@@ -174,18 +174,60 @@ void DemSystem::catch_up() const {
   double* x = p_.x.data();
   double* v = p_.v.data();
   const V3 zero{0, 0, 0};
+  // Blocks of kBlock particles side by side (structure of arrays), so that the steps' dependent
+  // kick -> drift chains of different particles run in parallel (SIMD lanes) instead of one particle's
+  // chain after another: the same operations on the same values as kick_drift, step by step.
+  constexpr std::size_t kBlock = 8;
+  const std::size_t nd = dormant_.size();
+  const double dt = kc_.dt;
   with_drive([&](const auto& drive) {
-    for (std::int32_t i : dormant_) {
-      // in registers: the kicks and drifts of kick_drift, one per step missed
-      V3 xi = load3(x + 3 * i), vi = load3(v + 3 * i);
-      for (std::int64_t k = 0; k < steps; ++k) {
-        vi = kicked_velocity(static_cast<std::size_t>(i), vi, zero, drive, kc_);
-        xi = xi + kc_.dt * vi;
+    using Drive = std::decay_t<decltype(drive)>;
+    for (std::size_t b0 = 0; b0 < nd; b0 += kBlock) {
+      const std::size_t nb = std::min(kBlock, nd - b0);
+      std::size_t idx[kBlock];
+      alignas(64) double X[3][kBlock], V[3][kBlock], DA[3][kBlock];
+      for (std::size_t m = 0; m < kBlock; ++m) {
+        idx[m] = static_cast<std::size_t>(dormant_[b0 + std::min(m, nb - 1)]);  // short block: repeat the last
+        for (int c = 0; c < 3; ++c) {
+          X[c][m] = x[3 * idx[m] + c];
+          V[c][m] = v[3 * idx[m] + c];
+        }
       }
-      store3(x + 3 * i, xi);
-      store3(v + 3 * i, vi);
-      // the spin's kick by a zero torque (once is every time: w + 0 does not change after the first)
-      if (p_.rotation) store3(&p_.w[3 * i], kicked_spin(load3(&p_.w[3 * i]), zero, kc_));
+      if constexpr (std::is_same_v<Drive, PerParticleDrive>) {
+        // a = F/m + a_ext with F = 0 does not depend on v: dt a once (kicked_velocity's own expressions)
+        for (std::size_t m = 0; m < kBlock; ++m) {
+          const V3 a = kc_.inv_mass * zero + drive(idx[m], zero);
+          DA[0][m] = dt * a.x;
+          DA[1][m] = dt * a.y;
+          DA[2][m] = dt * a.z;
+        }
+        for (std::int64_t k = 0; k < steps; ++k)
+          for (int c = 0; c < 3; ++c)
+            for (std::size_t m = 0; m < kBlock; ++m) {
+              V[c][m] = V[c][m] + DA[c][m];
+              X[c][m] = X[c][m] + dt * V[c][m];
+            }
+      } else {
+        for (std::int64_t k = 0; k < steps; ++k)
+          for (std::size_t m = 0; m < kBlock; ++m) {
+            const V3 vn = kicked_velocity(idx[m], V3{V[0][m], V[1][m], V[2][m]}, zero, drive, kc_);
+            V[0][m] = vn.x;
+            V[1][m] = vn.y;
+            V[2][m] = vn.z;
+            X[0][m] = X[0][m] + dt * vn.x;
+            X[1][m] = X[1][m] + dt * vn.y;
+            X[2][m] = X[2][m] + dt * vn.z;
+          }
+      }
+      for (std::size_t m = 0; m < nb; ++m) {
+        const std::size_t i = idx[m];
+        for (int c = 0; c < 3; ++c) {
+          x[3 * i + c] = X[c][m];
+          v[3 * i + c] = V[c][m];
+        }
+        // the spin's kick by a zero torque (once is every time: w + 0 does not change after the first)
+        if (p_.rotation) store3(&p_.w[3 * i], kicked_spin(load3(&p_.w[3 * i]), zero, kc_));
+      }
     }
   });
   dormant_step_ = step_;
@@ -239,14 +281,11 @@ void DemSystem::advance() {
   last_stats_ = KernelStats{};
   // choose the contact model once per step, outside the particle loop
   if (!s_.contacts) return;
-  // entries farther apart at the build than twice the displacement bound cannot touch (integrator.hpp);
-  // widened by 1e-9 of it and 1e-12 of the diameter against rounding
-  const double reach = 2.0 * displacement_bound_ * (1.0 + 1e-9) + 1e-12 * s_.diameter_m;
   if (p_.rotation)
-    compute_forces(p_, list_, SpringDashpot<true>{s_.contact}, kc_, force_rows_.data(), force_rows_.size(), reach,
+    compute_forces(p_, list_, SpringDashpot<true>{s_.contact}, kc_, force_rows_.data(), force_rows_.size(),
                    force_.data(), torque_.data(), last_stats_);
   else
-    compute_forces(p_, list_, SpringDashpot<false>{s_.contact}, kc_, force_rows_.data(), force_rows_.size(), reach,
+    compute_forces(p_, list_, SpringDashpot<false>{s_.contact}, kc_, force_rows_.data(), force_rows_.size(),
                    force_.data(), nullptr, last_stats_);
 }
 
