@@ -22,8 +22,9 @@ DemSystem::DemSystem(const DemSettings& settings, MPI_Comm comm)
   kc_.inv_mass = 1.0 / s_.mass_kg;
   kc_.inv_inertia = 1.0 / (0.4 * s_.mass_kg * radius * radius);  // solid sphere: I = 2/5 m r^2
   s_.contact.dt = s_.dt_s;
-  // free flight needs an acceleration that does not depend on the velocity (the header)
-  free_flight_ = s_.per_particle_drive || s_.drive.drag_rate == 0.0;
+  // free flight: with a per-particle drive, or the uniform one whose drag keeps lambda dt <= 1/2 (the scene
+  // refuses more; the speed bound of select_free_flight needs 1 - lambda dt >= 0)
+  free_flight_ = s_.per_particle_drive || s_.drive.drag_rate * s_.dt_s <= 0.5;
   t_neigh_ = timers_.add("neighbor");
   t_comm_ = timers_.add("comm");
   t_force_ = timers_.add("force+integrate");
@@ -245,25 +246,34 @@ void DemSystem::select_free_flight() {
     for (std::size_t i = 0; i < n; ++i) integrate_[i] = static_cast<std::int32_t>(i);
     return;
   }
-  // |v_k| in [|v_0| - k dt |a|, |v_0| + k dt |a|] for k <= kHorizon steps, widened by 1e-9 (the rounding of
-  // 100 steps is ~1e-14 of it)
+  // |v_k| in [|v_0| - k dt A, |v_0| + k dt A] for k <= kHorizon steps, A a bound on |a| over them, widened
+  // by 1e-9 (the rounding of 100 steps is ~1e-14 of it). A per-particle drive is constant: A = |a|. The
+  // uniform drive a = g - lambda v: with 0 <= lambda dt <= 1/2, |v_{k+1}| <= (1 - lambda dt)|v_k| + dt |g|,
+  // so |v_k| <= max(|v_0|, |g|/lambda) and A = |g| + lambda max(|v_0|, |g|/lambda).
   const double h = static_cast<double>(kHorizon) * s_.dt_s;
   constexpr double kSlack = 1e-9;
   double lower_max = 0;
+  const auto accel_bound = [&](const auto& drive, std::size_t i, V3 v, double s) {
+    if constexpr (std::is_same_v<std::decay_t<decltype(drive)>, PerParticleDrive>) {
+      const V3 a = drive(i, v);
+      return std::sqrt(dot(a, a));
+    } else {
+      const double g = std::sqrt(dot(drive.accel, drive.accel)), lambda = drive.drag_rate;
+      return lambda > 0 ? g + lambda * std::max(s, g / lambda) : g;
+    }
+  };
   with_drive([&](const auto& drive) {
     for (std::size_t i = 0; i < n; ++i) {
       if (referenced_[i]) continue;
       const V3 v = load3(&p_.v[3 * i]);
-      const V3 a = drive(i, v);
-      const double s = std::sqrt(dot(v, v)), A = std::sqrt(dot(a, a));
+      const double s = std::sqrt(dot(v, v)), A = accel_bound(drive, i, v, s);
       if (std::isfinite(s) && std::isfinite(A)) lower_max = std::max(lower_max, (s - h * A) * (1.0 - kSlack));
     }
     for (std::size_t i = 0; i < n; ++i) {
       bool every_step = referenced_[i] != 0;
       if (!every_step) {
         const V3 v = load3(&p_.v[3 * i]);
-        const V3 a = drive(i, v);
-        const double s = std::sqrt(dot(v, v)), A = std::sqrt(dot(a, a));
+        const double s = std::sqrt(dot(v, v)), A = accel_bound(drive, i, v, s);
         const double upper = (s + h * A) * (1.0 + kSlack);
         every_step = !(std::isfinite(s) && std::isfinite(A)) || (upper > 0.0 && upper >= lower_max);
       }

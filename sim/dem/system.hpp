@@ -18,8 +18,8 @@
 // kHorizon steps only the few whose upper bound reaches the largest lower bound can hold the maximum;
 // those (`candidates`) are integrated every step with the others, so the maximum is the one the plain
 // pass finds, and rebuilds, wraps and trajectories are those of integrating everyone every step.
-// Free flight needs an acceleration independent of the velocity (coupled runs, dry runs without
-// drag); with the quiescent fluid's drag every particle is integrated every step.
+// The drive may depend on the velocity (the quiescent fluid's linear drag): the bound on |a| then uses
+// the drag's contraction (select_free_flight).
 #include <mpi.h>
 
 #include <array>
