@@ -390,8 +390,11 @@ int main(int argc, char** argv) {
       }
       std::printf("\n");
       if (!no_projection) {
+        // the same from the process CPU time: what the cores would take had they been this program's alone
+        // (the wall time of a shared machine counts the other processes' turns; MPI's busy waiting is CPU)
+        const double cpu_share = cpu / (wall * ranks);
         std::printf("\nprojected wall time at %d rank(s) (measured ns per particle-step and dt_fluid of this state; "
-                    "fluid per step scaled by cells):\n",
+                    "fluid per step scaled by cells), from the wall time and from the process CPU time:\n",
                     ranks);
         const fs::path scenes = fs::path(CGD_SOURCE_DIR) / "data" / "scenes";
         std::vector<fs::path> files;
@@ -406,7 +409,8 @@ int main(int argc, char** argv) {
           const double cells = static_cast<double>(s.derived.cells[0]) * s.derived.cells[1] * s.derived.cells[2];
           const double hours =
               (n * steps * c_particle + s.run.end_time_s / dt_fluid * c_fluid * cells / cells_here) / ranks / 3600;
-          std::printf("  %-16s %9.0f particles  %.4g s  %.3g h\n", s.name.c_str(), n, s.run.end_time_s, hours);
+          std::printf("  %-16s %9.0f particles  %.4g s  %.3g h (wall)  %.3g h (CPU time)\n", s.name.c_str(), n,
+                      s.run.end_time_s, hours, hours * cpu_share);
         }
       }
     }
