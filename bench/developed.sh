@@ -31,9 +31,9 @@ for r in "${ranks[@]}"; do
   summaries+=("$(grep '^summary:' <<< "$out")")
 done
 echo
-echo "ranks | ns/particle-step (CPU) | particle-steps/s/core | steps/rebuild | dt_fluid"
+echo "ranks | ns/particle-step (wall x ranks) | ns/particle-step (process CPU) | particle-steps/s/core (wall) | steps/rebuild | dt_fluid"
 for s in "${summaries[@]}"; do
   get() { sed -n "s/.* $1=\([^ ]*\).*/\1/p" <<< "$s"; }
-  echo "$(get ranks) | $(get ns_per_ps) | $(get ps_per_s_per_core) | $(get steps_per_rebuild) | $(get dt_fluid)"
+  echo "$(get ranks) | $(get ns_per_ps) | $(get ns_cpu_per_ps) | $(get ps_per_s_per_core) | $(get steps_per_rebuild) | $(get dt_fluid)"
 done
 exit $status
