@@ -16,14 +16,12 @@ Coupler::Coupler(const CouplerSettings& settings, const fluid::FluidGrid& grid) 
   view_.ny_local = grid.ny_local();
   view_.ghost = fluid::FluidGrid::kGhost;
   phi_ = grid.make_field();
-  for (int d = 0; d < 3; ++d) {
-    bv_[d] = grid.make_field();
-    centre_u_[d] = grid.make_field();
-    grad_p_[d] = grid.make_field();
-  }
+  for (int d = 0; d < 3; ++d) bv_[d] = grid.make_field();
+  cells_.assign(kRead * grid.storage_size(), 0.0);
+  deposit_.assign(kDeposit * grid.storage_size(), 0.0);
 }
 
-void Coupler::interpolate_fluid(const dem::Particles& p, fluid::FluidState& state, ParticleCoupling& out) {
+void Coupler::cell_fields(const fluid::FluidState& state, bool with_phi) {
   // cell-centred velocity (mean of the two faces) and pressure gradient (central differences) on the
   // owned rows, then the ghost rows from the neighbours: particles near a slab face need them
   const fluid::FluidGrid& g = grid_;
@@ -38,31 +36,16 @@ void Coupler::interpolate_fluid(const dem::Particles& p, fluid::FluidState& stat
     for (int k = 0; k < nz; ++k)
       for (int i = 0; i < nx; ++i) {
         const std::size_t c = g.index(i, j, k);
-        centre_u_[0][c] = 0.5 * (state.velocity[0][c] + state.velocity[0][g.index(xp[i], j, k)]);
-        centre_u_[1][c] = 0.5 * (state.velocity[1][c] + state.velocity[1][g.index(i, j + 1, k)]);
-        centre_u_[2][c] = 0.5 * (state.velocity[2][c] + state.velocity[2][g.index(i, j, zp[k])]);
-        grad_p_[0][c] = (pr[g.index(xp[i], j, k)] - pr[g.index(xm[i], j, k)]) / (2.0 * h[0]);
-        grad_p_[1][c] = (pr[g.index(i, j + 1, k)] - pr[g.index(i, j - 1, k)]) / (2.0 * h[1]);
-        grad_p_[2][c] = (pr[g.index(i, j, zp[k])] - pr[g.index(i, j, zm[k])]) / (2.0 * h[2]);
+        double* out = &cells_[kRead * c];
+        out[0] = 0.5 * (state.velocity[0][c] + state.velocity[0][g.index(xp[i], j, k)]);
+        out[1] = 0.5 * (state.velocity[1][c] + state.velocity[1][g.index(i, j + 1, k)]);
+        out[2] = 0.5 * (state.velocity[2][c] + state.velocity[2][g.index(i, j, zp[k])]);
+        out[3] = (pr[g.index(xp[i], j, k)] - pr[g.index(xm[i], j, k)]) / (2.0 * h[0]);
+        out[4] = (pr[g.index(i, j + 1, k)] - pr[g.index(i, j - 1, k)]) / (2.0 * h[1]);
+        out[5] = (pr[g.index(i, j, zp[k])] - pr[g.index(i, j, zm[k])]) / (2.0 * h[2]);
+        out[6] = with_phi ? phi_[c] : 0.0;
       }
-  g.exchange_ghosts({centre_u_[0].data(), centre_u_[1].data(), centre_u_[2].data(), grad_p_[0].data(),
-                     grad_p_[1].data(), grad_p_[2].data()});
-  const std::size_t n = p.n_owned;
-  out.fluid_velocity.assign(3 * n, 0.0);
-  out.pressure_gradient.assign(3 * n, 0.0);
-  for (std::size_t i = 0; i < n; ++i) {
-    double u[3] = {0, 0, 0}, gp[3] = {0, 0, 0};
-    for_each_tsc_cell(view_, &p.x[3 * i], [&](std::size_t c, double w) {
-      for (int d = 0; d < 3; ++d) {
-        u[d] += w * centre_u_[d][c];
-        gp[d] += w * grad_p_[d][c];
-      }
-    });
-    for (int d = 0; d < 3; ++d) {
-      out.fluid_velocity[3 * i + d] = u[d];
-      out.pressure_gradient[3 * i + d] = gp[d];
-    }
-  }
+  exchange_interleaved_ghosts(g.comm(), view_, cells_.data(), kRead);
 }
 
 void Coupler::compute_drag(const dem::Particles& p, fluid::FluidState& state) {
@@ -70,10 +53,13 @@ void Coupler::compute_drag(const dem::Particles& p, fluid::FluidState& state) {
   const std::size_t n = p.n_owned;
   const double vol = s_.particle_volume_m3 * s_.parcel_volume_factor;  // solid volume per (parcel) particle
   const double per_cell = vol / g.cell_volume();
-  // 1. solids fraction
+  // 1. the particles' stencils (kept for step 4) and the solids fraction
+  stencil_.resize(n);
   std::fill(phi_.begin(), phi_.end(), 0.0);
-  for (std::size_t i = 0; i < n; ++i)
-    for_each_tsc_cell(view_, &p.x[3 * i], [&](std::size_t c, double w) { phi_[c] += per_cell * w; });
+  for (std::size_t i = 0; i < n; ++i) {
+    stencil_[i] = make_stencil(view_, &p.x[3 * i]);
+    for_each_stencil_cell(view_, stencil_[i], [&](std::size_t c, double w) { phi_[c] += per_cell * w; });
+  }
   accumulate_ghosts(g.comm(), view_, {phi_.data()});
   // void fraction with a conservative floor
   const std::size_t first = g.first_owned(), last = first + g.owned_size();
@@ -106,35 +92,50 @@ void Coupler::compute_drag(const dem::Particles& p, fluid::FluidState& state) {
     state.void_fraction[c] = s_.two_way ? eps : 1.0;
     phi_[c] = 1.0 - eps;  // the solids fraction the fluid sees: used at the particles too
   }
-  g.exchange_ghosts({phi_.data()});
-  // 2. fluid at the particles, drag coefficients
-  interpolate_fluid(p, state, pc_);
+  // 2. fluid at the particles (u, grad p, phi in one pass over the stencil), drag coefficients, and
+  // their deposit B, B V
+  cell_fields(state, true);
   pc_.beta.assign(n, 0.0);
-  std::vector<double>& B = state.drag_coefficient;
-  std::fill(B.begin(), B.end(), 0.0);
-  for (int d = 0; d < 3; ++d) std::fill(bv_[d].begin(), bv_[d].end(), 0.0);
+  pc_.fluid_velocity.assign(3 * n, 0.0);
+  pc_.pressure_gradient.assign(3 * n, 0.0);
+  std::fill(deposit_.begin(), deposit_.end(), 0.0);
+  const double* cf = cells_.data();
+  double* dep = deposit_.data();
   visit_any_drag_law(s_.drag, s_.drag_params, s_.filtered, [&](const auto& law) {
     for (std::size_t i = 0; i < n; ++i) {
-      double phi_p = 0;
-      for_each_tsc_cell(view_, &p.x[3 * i], [&](std::size_t c, double w) { phi_p += w * phi_[c]; });
+      // all kRead values of a cell at once (vectorised; each sum in the kernel's cell order)
+      alignas(64) double acc[kRead] = {0, 0, 0, 0, 0, 0, 0, 0};
+      for_each_stencil_cell(view_, stencil_[i], [&](std::size_t c, double w) {
+        const double* q = cf + kRead * c;
+        for (int m = 0; m < kRead; ++m) acc[m] += w * q[m];
+      });
+      const double u[3] = {acc[0], acc[1], acc[2]}, gp[3] = {acc[3], acc[4], acc[5]}, phi_p = acc[6];
+      const double* v = &p.v[3 * i];
       double slip2 = 0;
       for (int d = 0; d < 3; ++d) {
-        const double s = pc_.fluid_velocity[3 * i + d] - p.v[3 * i + d];
+        pc_.fluid_velocity[3 * i + d] = u[d];
+        pc_.pressure_gradient[3 * i + d] = gp[d];
+        const double s = u[d] - v[d];
         slip2 += s * s;
       }
       const double beta = law.beta_p(phi_p, std::sqrt(slip2));
       pc_.beta[i] = beta;
       if (!s_.two_way) continue;
       const double bw = beta * per_cell;
-      const double* v = &p.v[3 * i];
-      for_each_tsc_cell(view_, &p.x[3 * i], [&](std::size_t c, double w) {
-        B[c] += bw * w;
-        bv_[0][c] += bw * w * v[0];
-        bv_[1][c] += bw * w * v[1];
-        bv_[2][c] += bw * w * v[2];
+      const double src[kDeposit] = {1.0, v[0], v[1], v[2]};  // bww * 1.0 == bww exactly
+      for_each_stencil_cell(view_, stencil_[i], [&](std::size_t c, double w) {
+        double* q = dep + kDeposit * c;
+        const double bww = bw * w;
+        for (int m = 0; m < kDeposit; ++m) q[m] += bww * src[m];
       });
     }
   });
+  std::vector<double>& B = state.drag_coefficient;
+  const std::size_t storage = g.storage_size();
+  for (std::size_t c = 0; c < storage; ++c) {
+    B[c] = dep[kDeposit * c];
+    for (int d = 0; d < 3; ++d) bv_[d][c] = dep[kDeposit * c + 1 + d];
+  }
   if (s_.two_way) {
     accumulate_ghosts(g.comm(), view_, {B.data(), bv_[0].data(), bv_[1].data(), bv_[2].data()});
     for (std::size_t c = first; c < last; ++c)
@@ -143,14 +144,24 @@ void Coupler::compute_drag(const dem::Particles& p, fluid::FluidState& state) {
 }
 
 void Coupler::compute_particle_forces(dem::Particles& p, fluid::FluidState& state) {
-  // pc_ keeps compute_drag's quantities (snapshots); the new fluid level goes to new_level_
-  interpolate_fluid(p, state, new_level_);
+  // pc_ keeps compute_drag's quantities (snapshots); the new fluid level is interpolated and used at once
+  if (stencil_.size() != p.n_owned)
+    throw RunError("coupler: the particles changed between the drag and the particle forces of a fluid step");
+  cell_fields(state, false);
   const double inv_rho_p = s_.particle_volume_m3 / s_.particle_mass_kg * s_.parcel_volume_factor;  // V/m
+  const double* cf = cells_.data();
   for (std::size_t i = 0; i < p.n_owned; ++i) {
+    alignas(64) double acc[kRead] = {0, 0, 0, 0, 0, 0, 0, 0};
+    for_each_stencil_cell(view_, stencil_[i], [&](std::size_t c, double w) {
+      const double* q = cf + kRead * c;
+      for (int m = 0; m < kRead; ++m) acc[m] += w * q[m];
+    });
+    const double* u = acc;
+    const double* gp = acc + 3;
     const double beta_over_rho = pc_.beta[i] * inv_rho_p;
     for (int d = 0; d < 3; ++d) {
-      double a = beta_over_rho * (new_level_.fluid_velocity[3 * i + d] - p.v[3 * i + d]) + s_.particle_body_accel[d];
-      if (s_.pressure_gradient_force) a -= inv_rho_p * new_level_.pressure_gradient[3 * i + d];
+      double a = beta_over_rho * (u[d] - p.v[3 * i + d]) + s_.particle_body_accel[d];
+      if (s_.pressure_gradient_force) a -= inv_rho_p * gp[d];
       p.a_ext[3 * i + d] = a;
     }
   }

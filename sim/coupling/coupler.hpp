@@ -18,6 +18,12 @@
 // deposition and interpolation use the same weights (transposes). Periodic driving (models.md): the
 // mean pressure gradient rho_mix g is removed from p; the fluid gets eps (rho_f - rho_mix) g, each
 // particle -V_p rho_mix g besides m g, so the net force on the box is zero.
+// Cost (issue 17): each particle's TSC stencil (first cells and offsets, exchange.hpp) is computed once
+// per fluid step, at the deposit of step 1, and serves steps 2 and 4 (the particles do not move between
+// them); the cell fields a particle reads (u, grad p, phi) are stored together, one cache line per cell,
+// and so are the ones it deposits (B, B V), so steps 2 and 4 are one pass each over the particles. The
+// sums are the same, in the same order, as with one field at a time: the results are bit for bit those
+// of the kernel evaluated per field.
 // One-way coupling: steps 1-2 still give eps and the particle drag, but the fluid is solved as a pure
 // fluid (B = 0 and eps = 1 in its equations: a fluid that gets out of the particles' way without being
 // pushed develops a growing displacement flow), with hydrostatic driving (G = rho_f g; sim/coupled_step.hpp
@@ -62,7 +68,8 @@ class Coupler {
   /// Steps 1 and 2: eps into state.void_fraction; B, V into the state's drag fields; the particles'
   /// beta, u_p and grad p_p (at the fluid's current level) into `particles()`. Collective.
   void compute_drag(const dem::Particles& p, fluid::FluidState& state);
-  /// Step 4: the particles' external accelerations (p.a_ext) from the fluid's new level. Collective.
+  /// Step 4: the particles' external accelerations (p.a_ext) from the fluid's new level, with the stencils
+  /// of the last compute_drag (the particles must not have moved since). Collective.
   void compute_particle_forces(dem::Particles& p, fluid::FluidState& state);
 
   const ParticleCoupling& particles() const { return pc_; }
@@ -72,15 +79,19 @@ class Coupler {
   const CouplerSettings& settings() const { return s_; }
 
  private:
-  /// u and grad p of the fluid's current level at every particle, into out.fluid_velocity and
-  /// out.pressure_gradient.
-  void interpolate_fluid(const dem::Particles& p, fluid::FluidState& state, ParticleCoupling& out);
+  /// Cell-centred u and grad p of the fluid's current level (and, with `with_phi`, phi_) into the
+  /// interleaved cells_ (kRead values per cell), owned rows and ghost rows.
+  void cell_fields(const fluid::FluidState& state, bool with_phi);
+  static constexpr int kRead = 8;  // u (3), grad p (3), phi, unused: one 64-byte line per cell
+  static constexpr int kDeposit = 4;  // B, B V (3)
   CouplerSettings s_;
   const fluid::FluidGrid& grid_;
   GridView view_;
-  std::vector<double> phi_, bv_[3], centre_u_[3], grad_p_[3];
+  std::vector<double> phi_, bv_[3];
+  std::vector<double> cells_;      // kRead per cell (storage layout of the grid, interleaved)
+  std::vector<double> deposit_;    // kDeposit per cell
+  std::vector<Stencil> stencil_;   // per owned particle, from the last compute_drag
   ParticleCoupling pc_;
-  ParticleCoupling new_level_;  // the fluid's new level at the particles (compute_particle_forces)
   long long floored_ = 0;
   double max_phi_ = 0;
 };

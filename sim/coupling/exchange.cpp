@@ -42,4 +42,27 @@ void accumulate_ghosts(MPI_Comm comm, const GridView& g, std::initializer_list<d
   }
 }
 
+void exchange_interleaved_ghosts(MPI_Comm comm, const GridView& g, double* field, int k) {
+  int rank = 0, size = 1;
+  MPI_Comm_rank(comm, &rank);
+  MPI_Comm_size(comm, &size);
+  const std::size_t K = static_cast<std::size_t>(k);
+  const std::size_t block = g.plane() * static_cast<std::size_t>(g.ghost) * K;
+  double* lower_ghosts = field + K * g.index(0, -g.ghost, 0);
+  double* upper_ghosts = field + K * g.index(0, g.ny_local, 0);
+  const double* bottom_rows = field + K * g.index(0, 0, 0);
+  const double* top_rows = field + K * g.index(0, g.ny_local - g.ghost, 0);
+  if (size == 1) {
+    std::copy(top_rows, top_rows + block, lower_ghosts);
+    std::copy(bottom_rows, bottom_rows + block, upper_ghosts);
+    return;
+  }
+  const int up = (rank + 1) % size, down = (rank + size - 1) % size;
+  // my bottom rows go down, the rows above my slab come from up; then the mirror
+  MPI_Sendrecv(bottom_rows, static_cast<int>(block), MPI_DOUBLE, down, 73, upper_ghosts, static_cast<int>(block),
+               MPI_DOUBLE, up, 73, comm, MPI_STATUS_IGNORE);
+  MPI_Sendrecv(top_rows, static_cast<int>(block), MPI_DOUBLE, up, 74, lower_ghosts, static_cast<int>(block),
+               MPI_DOUBLE, down, 74, comm, MPI_STATUS_IGNORE);
+}
+
 }  // namespace cgd::coupling

@@ -8,6 +8,8 @@
 #include <mpi.h>
 
 #include <array>
+#include <cmath>
+#include <cstdint>
 #include <cstddef>
 #include <initializer_list>
 #include <vector>
@@ -47,6 +49,65 @@ inline void for_each_tsc_cell(const GridView& g, const double* x, F&& f) {
       for (int a = 0; a < 3; ++a) f(row + static_cast<std::size_t>(ix[a]), ax.w[a] * wyz);
     }
 }
+
+/// A particle's TSC stencil on this slab (issue 17: computed once per fluid step and kept, instead of
+/// the kernel and its integer modulos 5 times per particle and step): the first cell along each axis
+/// (x and z unwrapped, y local) and the particle's offset d from the nearest cell centre along each
+/// axis, from which the weights follow exactly as tsc_weights computes them.
+struct Stencil {
+  std::int32_t first[3] = {0, 0, 0};
+  double d[3] = {0, 0, 0};
+};
+
+/// The stencil of a particle at x (the arithmetic of tsc_weights: s = (x - x0)/h, c = floor(s), d = s - c - 1/2).
+inline Stencil make_stencil(const GridView& g, const double* x) {
+  Stencil st;
+  const double x0[3] = {0.0, g.j0 * g.spacing[1], 0.0};
+  for (int a = 0; a < 3; ++a) {
+    const double s = (x[a] - x0[a]) / g.spacing[a];
+    const double c = std::floor(s);
+    st.d[a] = s - c - 0.5;
+    st.first[a] = static_cast<int>(c) - 1;
+  }
+  return st;
+}
+
+/// The three weights of one axis from the offset d (tsc_weights' expressions).
+inline void stencil_weights(double d, double* w) {
+  w[0] = 0.5 * (0.5 - d) * (0.5 - d);
+  w[1] = 0.75 - d * d;
+  w[2] = 0.5 * (0.5 + d) * (0.5 + d);
+}
+
+/// Periodic index in [0, n) (a modulo only off the fast path).
+inline int wrap_index(int i, int n) {
+  if (static_cast<unsigned>(i) < static_cast<unsigned>(n)) return i;
+  return ((i % n) + n) % n;
+}
+
+/// for_each_tsc_cell from a kept stencil: the same cells, order and weights, bit for bit.
+template <class F>
+inline void for_each_stencil_cell(const GridView& g, const Stencil& st, F&& f) {
+  double wx[3], wy[3], wz[3];
+  stencil_weights(st.d[0], wx);
+  stencil_weights(st.d[1], wy);
+  stencil_weights(st.d[2], wz);
+  int ix[3], iz[3];
+  for (int a = 0; a < 3; ++a) {
+    ix[a] = wrap_index(st.first[0] + a, g.cells[0]);
+    iz[a] = wrap_index(st.first[2] + a, g.cells[2]);
+  }
+  for (int c = 0; c < 3; ++c)
+    for (int b = 0; b < 3; ++b) {
+      const double wyz = wy[b] * wz[c];
+      const std::size_t row = g.index(0, st.first[1] + b, iz[c]);
+      for (int a = 0; a < 3; ++a) f(row + static_cast<std::size_t>(ix[a]), wx[a] * wyz);
+    }
+}
+
+/// Fill the ghost planes of a field of `k` values per cell (interleaved, cell-major) from the
+/// neighbouring slabs (periodic in y). Collective.
+void exchange_interleaved_ghosts(MPI_Comm comm, const GridView& g, double* field, int k);
 
 /// Add every ghost plane into the owning rank's rows (periodic in y) and zero the ghosts. Collective.
 void accumulate_ghosts(MPI_Comm comm, const GridView& g, std::initializer_list<double*> fields);

@@ -79,8 +79,65 @@ void GhostExchange::pack(const Particles& p, const Swap& s, std::vector<double>&
   }
 }
 
+void GhostExchange::pack_live(const Particles& p, const Swap& s, std::vector<double>& buf) const {
+  const int per = p.rotation ? 9 : 6;
+  buf.resize(s.live_send.size() * per);
+  double* out = buf.data();
+  for (std::int32_t k : s.live_send) {
+    const std::int32_t i = s.send[k];
+    const double* xi = &p.x[3 * i];
+    const double* vi = &p.v[3 * i];
+    out[0] = xi[0] + s.shift[0];
+    out[1] = xi[1] + s.shift[1];
+    out[2] = xi[2] + s.shift[2];
+    out[3] = vi[0];
+    out[4] = vi[1];
+    out[5] = vi[2];
+    if (p.rotation) {
+      const double* wi = &p.w[3 * i];
+      out[6] = wi[0];
+      out[7] = wi[1];
+      out[8] = wi[2];
+    }
+    out += per;
+  }
+}
+
+void GhostExchange::restrict_forward(std::vector<char>& flag) {
+  std::vector<char> out, in;
+  for (std::size_t n = swaps_.size(); n-- > 0;) {
+    Swap& s = swaps_[n];
+    // my ghosts of this swap that are flagged (receiver's view)
+    s.live_recv.clear();
+    for (std::size_t k = 0; k < s.recv_count; ++k)
+      if (flag[s.recv_first + k]) s.live_recv.push_back(static_cast<std::int32_t>(k));
+    const char* theirs = nullptr;  // the flags of the ghosts my send list made, one per entry
+    if (s.local) {
+      theirs = flag.data() + s.recv_first;
+    } else {
+      // the flags go back the way the ghosts came: to peer_recv (who sent me these ghosts), and
+      // from peer_send (to whom I sent mine)
+      out.assign(flag.begin() + static_cast<std::ptrdiff_t>(s.recv_first),
+                 flag.begin() + static_cast<std::ptrdiff_t>(s.recv_first + s.recv_count));
+      in.assign(s.send.size(), 0);
+      MPI_Sendrecv(out.data(), static_cast<int>(out.size()), MPI_CHAR, s.peer_recv, 80 + static_cast<int>(n), in.data(),
+                   static_cast<int>(in.size()), MPI_CHAR, s.peer_send, 80 + static_cast<int>(n), slabs_.comm(),
+                   MPI_STATUS_IGNORE);
+      theirs = in.data();
+    }
+    s.live_send.clear();
+    for (std::size_t k = 0; k < s.send.size(); ++k)
+      if (theirs[k]) {
+        s.live_send.push_back(static_cast<std::int32_t>(k));
+        flag[static_cast<std::size_t>(s.send[k])] = 1;
+      }
+  }
+  restricted_ = true;
+}
+
 void GhostExchange::build(Particles& p, double cutoff) {
   swaps_.clear();
+  restricted_ = false;
   p.resize(p.n_owned, p.n_owned);
   // Reserve room for the ghosts up front: the ghost shell's share of the particles (faces of width
   // `cutoff` around the slab, 25 % margin) or 25 % more than last time, whichever is larger.
@@ -156,6 +213,41 @@ void GhostExchange::build(Particles& p, double cutoff) {
 
 void GhostExchange::forward(Particles& p) {
   const int per = p.rotation ? 9 : 6;
+  if (restricted_) {
+    for (const Swap& s : swaps_) {
+      if (s.local) {
+        for (std::int32_t k : s.live_recv) {
+          const std::size_t g = s.recv_first + static_cast<std::size_t>(k), i = static_cast<std::size_t>(s.send[k]);
+          p.x[3 * g] = p.x[3 * i] + s.shift[0];
+          p.x[3 * g + 1] = p.x[3 * i + 1] + s.shift[1];
+          p.x[3 * g + 2] = p.x[3 * i + 2] + s.shift[2];
+          p.v[3 * g] = p.v[3 * i];
+          p.v[3 * g + 1] = p.v[3 * i + 1];
+          p.v[3 * g + 2] = p.v[3 * i + 2];
+          if (p.rotation) {
+            p.w[3 * g] = p.w[3 * i];
+            p.w[3 * g + 1] = p.w[3 * i + 1];
+            p.w[3 * g + 2] = p.w[3 * i + 2];
+          }
+        }
+        continue;
+      }
+      pack_live(p, s, send_buf_);
+      recv_buf_.resize(s.live_recv.size() * per);
+      MPI_Sendrecv(send_buf_.data(), static_cast<int>(send_buf_.size()), MPI_DOUBLE, s.peer_send, 40 + s.dim,
+                   recv_buf_.data(), static_cast<int>(recv_buf_.size()), MPI_DOUBLE, s.peer_recv, 40 + s.dim,
+                   slabs_.comm(), MPI_STATUS_IGNORE);
+      const double* in = recv_buf_.data();
+      for (std::int32_t k : s.live_recv) {
+        const std::size_t g = s.recv_first + static_cast<std::size_t>(k);
+        std::memcpy(&p.x[3 * g], in, 3 * sizeof(double));
+        std::memcpy(&p.v[3 * g], in + 3, 3 * sizeof(double));
+        if (p.rotation) std::memcpy(&p.w[3 * g], in + 6, 3 * sizeof(double));
+        in += per;
+      }
+    }
+    return;
+  }
   for (const Swap& s : swaps_) {
     if (s.local) {
       // direct copy: ghost k is source s.send[k] shifted

@@ -51,8 +51,15 @@ class GhostExchange {
 
   /// Discard old ghosts and create the ghosts within `cutoff` of every face of the owned region.
   void build(Particles& p, double cutoff);
-  /// Refresh ghost positions and velocities (and angular velocities) from their sources.
+  /// Refresh ghost positions and velocities (and angular velocities) from their sources: every ghost
+  /// after build(), only the ghosts kept by restrict_forward() after it.
   void forward(Particles& p);
+  /// `flag` (one per owned particle and ghost, n_total): 1 for the particles some neighbour list refers to.
+  /// Flags the source of every flagged ghost too (through earlier ghosts and across ranks, the swaps in
+  /// reverse), so that on return an owned particle is flagged when a list on any rank refers to it or to
+  /// one of its images; from then on forward() refreshes only the flagged ghosts (the others are read by
+  /// no list until the next build: ghosts of particles without neighbours). Collective.
+  void restrict_forward(std::vector<char>& flag);
   /// Move owned particles whose (wrapped) y lies outside this slab to the owning rank, with their
   /// contact records. Ghosts are dropped. A particle bound further than a neighbouring slab (a thin slab
   /// crossed between rebuilds) travels hop by hop, one slab per pass the shorter way round the periodic
@@ -69,14 +76,18 @@ class GhostExchange {
     std::array<double, 3> shift{};     // added to the position of every sent particle
     std::vector<std::int32_t> send;    // local indices of the sources
     std::size_t recv_first = 0, recv_count = 0;
+    // after restrict_forward: the k (into send / the received ghosts) forward() still refreshes
+    std::vector<std::int32_t> live_send, live_recv;
   };
   void pack(const Particles& p, const Swap& s, std::vector<double>& buf) const;
+  void pack_live(const Particles& p, const Swap& s, std::vector<double>& buf) const;
   /// One pass of migrate: every particle not owned here moves one slab toward its owner.
   void migrate_hop(Particles& p, ContactStore& store);
   const SlabDecomposition& slabs_;
   std::vector<Swap> swaps_;
   std::vector<double> send_buf_, recv_buf_;
   std::size_t ghosts_ = 0;
+  bool restricted_ = false;
 };
 
 }  // namespace cgd::dem

@@ -1,12 +1,20 @@
 #pragma once
-// The fused DEM step: contact forces and leapfrog (kick-drift, symplectic, second order) in one
-// streaming pass over the owned particles,
-//   v_{n+1/2} = v_{n-1/2} + dt a_n,   x_{n+1} = x_n + dt v_{n+1/2},   w_{n+1/2} = w_{n-1/2} + dt T_n / I,
-// with a_n = (sum_j F_ij)/m + a_ext(v_{n-1/2}). The state is double-buffered (particles.hpp), so the
-// pass reads neighbours at step n while it writes step n+1, and no force array is stored. Velocity-
-// dependent forces (dashpots, drag) use v_{n-1/2}, the same half-step lag as LAMMPS' velocity Verlet.
-// The contact model and the external forces are template parameters: an effect that is off
-// generates no code in the loop.
+// The DEM step in two passes over the particles' one state (issue 17; it was one fused pass into a
+// second state buffer):
+//   1. forces   a flat pass over the neighbour-list entries of the particles that have any, with the
+//               partners' positions and velocities prefetched a few entries ahead (the partner's
+//               position was the pass's one cache miss); each particle's force (and torque) is summed
+//               in its list's canonical order and stored;
+//   2. integrate a streaming pass, in place, over the particles that must move this step: leapfrog
+//               (kick-drift, symplectic, second order)
+//     v_{n+1/2} = v_{n-1/2} + dt a_n,   x_{n+1} = x_n + dt v_{n+1/2},   w_{n+1/2} = w_{n-1/2} + dt T_n / I,
+//               with a_n = F_n/m + a_ext(v_{n-1/2}).
+// Velocity-dependent forces (dashpots, drag) use v_{n-1/2}, the same half-step lag as LAMMPS' velocity
+// Verlet. The contact model and the external forces are template parameters: an effect that is off
+// generates no code in the loop. `kick_drift` is the one expression of a step's arithmetic: the
+// integration pass, the free flight of particles without neighbours (DemSystem) and the velocities
+// formed for output all call it, so a particle moved in free flight over n steps gets exactly the n
+// kicks and drifts the integration pass would have given it, bit for bit.
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
@@ -48,65 +56,105 @@ struct KernelConstants {
   double dt = 0, radius = 0, inv_mass = 0, inv_inertia = 0;
 };
 
-template <class Contact, class Drive>
-KernelStats advance_particles(Particles& p, NeighborList& list, const Contact& contact, const Drive& drive,
-                              const KernelConstants& k) {
-  KernelStats st;
-  const double dt = k.dt, contact_dist = 2.0 * k.radius, contact_dist2 = contact_dist * contact_dist;
+/// v_{n+1/2} of particle i from its force f (zero without contacts) and the drive.
+template <class Drive>
+inline V3 kicked_velocity(std::size_t i, V3 v, V3 f, const Drive& drive, const KernelConstants& k) {
+  const V3 a = k.inv_mass * f + drive(i, v);
+  return v + k.dt * a;
+}
+
+/// One step of particle i in place: kick, then drift. Returns |v_{n+1/2}|^2.
+template <class Drive>
+inline double kick_drift(std::size_t i, double* x, double* v, V3 f, const Drive& drive, const KernelConstants& k) {
+  const V3 v_new = kicked_velocity(i, load3(v), f, drive, k);
+  store3(v, v_new);
+  store3(x, load3(x) + k.dt * v_new);
+  return dot(v_new, v_new);
+}
+
+/// w_{n+1/2} from the torque.
+inline V3 kicked_spin(V3 w, V3 torque, const KernelConstants& k) { return w + (k.dt * k.inv_inertia) * torque; }
+
+/// Pass 1: the force (and torque) on each particle of `rows` (particles with a non-empty list) from its
+/// list, in the list's order, into force[3 i..] (torque[3 i..] with friction). Updates the tangential
+/// histories and the overlap statistics.
+template <class Contact>
+void compute_forces(const Particles& p, NeighborList& list, const Contact& contact, const KernelConstants& k,
+                    const std::int32_t* rows, std::size_t n_rows, double* __restrict force,
+                    double* __restrict torque_out, KernelStats& st) {
+  constexpr bool kFriction = std::is_same_v<Contact, SpringDashpot<true>>;
+  const double contact_dist = 2.0 * k.radius, contact_dist2 = contact_dist * contact_dist;
   const double* __restrict x = p.x.data();
   const double* __restrict v = p.v.data();
-  double* __restrict xn = p.x_next.data();
-  double* __restrict vn = p.v_next.data();
-  for (std::size_t i = 0; i < p.n_owned; ++i) {
+  const double* __restrict w = kFriction ? p.w.data() : nullptr;
+  const std::int64_t* __restrict offset = list.offset.data();
+  const std::int32_t* __restrict index = list.index.data();
+  const std::int64_t n_entries = static_cast<std::int64_t>(list.index.size());
+  // prefetch distance in list entries: entries are contiguous over rows (CSR), so the look-ahead runs
+  // on into the next particles' lists
+  constexpr std::int64_t kAhead = 8;
+  for (std::size_t r = 0; r < n_rows; ++r) {
+    const std::size_t i = static_cast<std::size_t>(rows[r]);
     const V3 xi = load3(x + 3 * i), vi = load3(v + 3 * i);
     V3 f{0, 0, 0};
     V3 torque{0, 0, 0};
     V3 wi{0, 0, 0};
-    constexpr bool kContacts = !std::is_same_v<Contact, NoContact>;
-    constexpr bool kFriction = std::is_same_v<Contact, SpringDashpot<true>>;
-    if constexpr (kFriction) wi = load3(p.w.data() + 3 * i);
-    if constexpr (kContacts) {
-      const std::int64_t k0 = list.offset[i], k1 = list.offset[i + 1];
-      for (std::int64_t e = k0; e < k1; ++e) {
-        const std::int32_t j = list.index[e];
-        const V3 dx = xi - load3(x + 3 * j);
-        const double r2 = dot(dx, dx);
-        if (r2 >= contact_dist2) {
-          if constexpr (kFriction) {
-            double* s = &list.xi[3 * e];
-            s[0] = s[1] = s[2] = 0.0;  // contact ended: its history goes with it
-          }
-          continue;
-        }
-        const double r = std::sqrt(r2);
-        const double overlap = contact_dist - r;
-        if (overlap > st.max_overlap) {
-          st.max_overlap = overlap;
-          st.overlap_particle = p.id[i];
-          st.overlap_partner = p.id[j];
-        }
-        const V3 dv = vi - load3(v + 3 * j);
+    if constexpr (kFriction) wi = load3(w + 3 * i);
+    const std::int64_t k0 = offset[i], k1 = offset[i + 1];
+    for (std::int64_t e = k0; e < k1; ++e) {
+      if (e + kAhead < n_entries) {
+        const std::int32_t jn = index[e + kAhead];
+        __builtin_prefetch(x + 3 * jn);
+        __builtin_prefetch(v + 3 * jn);
+        if constexpr (kFriction) __builtin_prefetch(w + 3 * jn);
+      }
+      const std::int32_t j = index[e];
+      const V3 dx = xi - load3(x + 3 * j);
+      const double r2 = dot(dx, dx);
+      if (r2 >= contact_dist2) {
         if constexpr (kFriction) {
-          f = f + contact.force(dx, r, overlap, dv, wi, load3(p.w.data() + 3 * j), k.radius, k.radius,
-                                &list.xi[3 * e], torque);
-        } else {
-          f = f + contact.normal_force(dx, r, overlap, dv);
+          double* s = &list.xi[3 * e];
+          s[0] = s[1] = s[2] = 0.0;  // contact ended: its history goes with it
         }
+        continue;
+      }
+      const double rr = std::sqrt(r2);
+      const double overlap = contact_dist - rr;
+      if (overlap > st.max_overlap) {
+        st.max_overlap = overlap;
+        st.overlap_particle = p.id[i];
+        st.overlap_partner = p.id[j];
+      }
+      const V3 dv = vi - load3(v + 3 * j);
+      if constexpr (kFriction) {
+        f = f + contact.force(dx, rr, overlap, dv, wi, load3(w + 3 * j), k.radius, k.radius, &list.xi[3 * e], torque);
+      } else {
+        f = f + contact.normal_force(dx, rr, overlap, dv);
       }
     }
-    const V3 a = k.inv_mass * f + drive(i, vi);
-    const V3 v_new = vi + dt * a;
-    const V3 x_new = xi + dt * v_new;
-    store3(vn + 3 * i, v_new);
-    store3(xn + 3 * i, x_new);
-    if constexpr (kFriction) store3(p.w_next.data() + 3 * i, wi + (dt * k.inv_inertia) * torque);
-    const double s2 = dot(v_new, v_new);
+    store3(force + 3 * i, f);
+    if constexpr (kFriction) store3(torque_out + 3 * i, torque);
+  }
+}
+
+/// Pass 2: kick and drift the particles of `idx` in place from their stored forces (zero for a
+/// particle whose list is empty) and the drive; spins from the stored torques. Records the largest
+/// speed and the first non-finite velocity.
+template <class Drive>
+void integrate(Particles& p, const double* __restrict force, const double* __restrict torque, const Drive& drive,
+               const KernelConstants& k, const std::int32_t* idx, std::size_t n, KernelStats& st) {
+  double* __restrict x = p.x.data();
+  double* __restrict v = p.v.data();
+  double* __restrict w = p.rotation ? p.w.data() : nullptr;
+  for (std::size_t m = 0; m < n; ++m) {
+    const std::size_t i = static_cast<std::size_t>(idx[m]);
+    const double s2 = kick_drift(i, x + 3 * i, v + 3 * i, load3(force + 3 * i), drive, k);
+    if (w) store3(w + 3 * i, kicked_spin(load3(w + 3 * i), load3(torque + 3 * i), k));
     if (!(s2 <= st.max_speed2)) {  // also true for NaN
       if (!std::isfinite(s2) && st.bad_particle < 0) st.bad_particle = p.id[i];
       st.max_speed2 = std::isfinite(st.max_speed2) ? s2 : st.max_speed2;
     }
   }
-  return st;
 }
 
 }  // namespace cgd::dem

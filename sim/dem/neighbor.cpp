@@ -48,19 +48,22 @@ Grid make_grid(const Particles& p, std::size_t count, double cell_size) {
 void NeighborList::build(const Particles& p, double cutoff, bool with_history) {
   const Grid g = make_grid(p, p.n_total, cutoff);
   const std::size_t ncell = g.count();
-  // counting sort of all particles (owned + ghosts) into cells
-  cell_start_.assign(ncell + 1, 0);
+  // counting sort of all particles (owned + ghosts) into cells, in place (issue 17: no copy of the cell
+  // array, no allocation once the buffers have grown): counts at c + 1, prefix sums make cell_start_[c + 1]
+  // the end of cell c, placing the particles from the last down moves it to cell c's start; the last slot
+  // holds the particle count. Cell c is then [cell_start_[c + 1], cell_start_[c + 2]), in increasing order.
+  cell_start_.assign(ncell + 2, 0);
   cell_of_.resize(p.n_total);
   for (std::size_t i = 0; i < p.n_total; ++i) {
     cell_of_[i] = g.cell(&p.x[3 * i]);
     ++cell_start_[cell_of_[i] + 1];
   }
-  for (std::size_t c = 0; c < ncell; ++c) cell_start_[c + 1] += cell_start_[c];
+  for (std::size_t c = 1; c < ncell; ++c) cell_start_[c + 1] += cell_start_[c];
   cell_items_.resize(p.n_total);
-  {
-    std::vector<std::int32_t> fill(cell_start_.begin(), cell_start_.end() - 1);
-    for (std::size_t i = 0; i < p.n_total; ++i) cell_items_[fill[cell_of_[i]]++] = static_cast<std::int32_t>(i);
-  }
+  for (std::size_t i = p.n_total; i-- > 0;)
+    cell_items_[--cell_start_[cell_of_[i] + 1]] = static_cast<std::int32_t>(i);
+  cell_start_[ncell + 1] = static_cast<std::int32_t>(p.n_total);
+  const std::int32_t* start = cell_start_.data() + 1;  // start[c] .. start[c + 1]: cell c
   const double cut2 = cutoff * cutoff;
   offset.resize(p.n_owned + 1);
   index.clear();
@@ -76,7 +79,7 @@ void NeighborList::build(const Particles& p, double cutoff, bool with_history) {
     for (int z = std::max(cz - 1, 0); z <= std::min(cz + 1, g.n[2] - 1); ++z) {
       for (int y = std::max(cy - 1, 0); y <= std::min(cy + 1, g.n[1] - 1); ++y) {
         const int row = (z * g.n[1] + y) * g.n[0];
-        for (std::int32_t k = cell_start_[row + x0], k1 = cell_start_[row + x1 + 1]; k < k1; ++k) {
+        for (std::int32_t k = start[row + x0], k1 = start[row + x1 + 1]; k < k1; ++k) {
           const std::int32_t j = cell_items_[k];
           const double* xj = &p.x[3 * j];
           const double ddx = xi_[0] - xj[0], ddy = xi_[1] - xj[1], ddz = xi_[2] - xj[2];

@@ -1,10 +1,12 @@
 #pragma once
 // Particle data of one rank as a structure of arrays (vectors interleaved xyz).
 // Layout: owned particles [0, n_owned), then ghosts [n_owned, n_total) (periodic images and copies of
-// neighbouring ranks' particles, refreshed every step). The kinematic state is double-buffered: the
-// fused force+integration pass reads (x, v, w) at step n and writes the next step into (x_next,
-// v_next, w_next); `swap_buffers` then makes the new state current. Velocities are the leapfrog
-// half-step velocities v_{n-1/2}; the synchronous v_n = (v_{n-1/2} + v_{n+1/2})/2 is formed for output.
+// neighbouring ranks' particles, refreshed every step). The kinematic state is held once and advanced
+// in place: the force pass (sim/dem/integrator.hpp) reads (x, v, w) at step n and stores each force in
+// DemSystem's force arrays, then a streaming pass kicks and drifts every particle to step n+1 (there is
+// no second state buffer since issue 17: 72 B per particle and ghost less, and one write stream less).
+// Velocities are the leapfrog half-step velocities v_{n-1/2}; the synchronous v_n = (v_{n-1/2} +
+// v_{n+1/2})/2 is formed for output (DemSystem::synchronous_velocity).
 #include <cstddef>
 #include <cstdint>
 #include <vector>
@@ -18,8 +20,7 @@ struct Particles {
   bool external = false;    // a per-particle external acceleration is held (coupled runs)
 
   std::vector<std::int64_t> id;  // global id, n_total
-  std::vector<double> x, v, w;   // current state, 3 * n_total (w empty without rotation)
-  std::vector<double> x_next, v_next, w_next;  // next state, 3 * n_owned used
+  std::vector<double> x, v, w;   // state, 3 * n_total (w empty without rotation)
   std::vector<double> a_ext;     // external acceleration, 3 per particle (fluid forces, gravity), if external
 
   /// Resize for `owned` particles plus room for `total - owned` ghosts; keeps existing data.
@@ -29,32 +30,20 @@ struct Particles {
     id.resize(total);
     x.resize(3 * total);
     v.resize(3 * total);
-    x_next.resize(3 * total);
-    v_next.resize(3 * total);
-    if (rotation) {
-      w.resize(3 * total);
-      w_next.resize(3 * total);
-    }
+    if (rotation) w.resize(3 * total);
     if (external) a_ext.resize(3 * total);
   }
   /// Capacity for `total` particles (owned + ghosts) without the geometric over-allocation that
   /// growing one swap at a time would cause.
   void reserve(std::size_t total) {
     id.reserve(total);
-    for (auto* f : {&x, &v, &x_next, &v_next}) f->reserve(3 * total);
-    if (rotation)
-      for (auto* f : {&w, &w_next}) f->reserve(3 * total);
+    for (auto* f : {&x, &v}) f->reserve(3 * total);
+    if (rotation) w.reserve(3 * total);
     if (external) a_ext.reserve(3 * total);
-  }
-  void swap_buffers() {
-    x.swap(x_next);
-    v.swap(v_next);
-    if (rotation) w.swap(w_next);
   }
   std::size_t bytes() const {
     return id.capacity() * sizeof(std::int64_t) +
-           (x.capacity() + v.capacity() + w.capacity() + x_next.capacity() + v_next.capacity() +
-            w_next.capacity() + a_ext.capacity()) * sizeof(double);
+           (x.capacity() + v.capacity() + w.capacity() + a_ext.capacity()) * sizeof(double);
   }
 };
 

@@ -3,6 +3,7 @@
 #include <cmath>
 #include <cstring>
 #include <sstream>
+#include <type_traits>
 
 #include "core/error.hpp"
 
@@ -21,6 +22,9 @@ DemSystem::DemSystem(const DemSettings& settings, MPI_Comm comm)
   kc_.inv_mass = 1.0 / s_.mass_kg;
   kc_.inv_inertia = 1.0 / (0.4 * s_.mass_kg * radius * radius);  // solid sphere: I = 2/5 m r^2
   s_.contact.dt = s_.dt_s;
+  // free flight: with a per-particle drive, or the uniform one whose drag keeps lambda dt <= 1/2 (the scene
+  // refuses more; the speed bound of select_free_flight needs 1 - lambda dt >= 0)
+  free_flight_ = s_.per_particle_drive || s_.drive.drag_rate * s_.dt_s <= 0.5;
   t_neigh_ = timers_.add("neighbor");
   t_comm_ = timers_.add("comm");
   t_force_ = timers_.add("force+integrate");
@@ -52,6 +56,9 @@ void DemSystem::set_particles(std::vector<std::int64_t> ids, std::vector<double>
   store_.offset.assign(n + 1, 0);
   list_valid_ = false;
   rebuild_due_ = true;
+  dormant_.clear();
+  integrate_.clear();
+  selection_due_ = true;
 }
 
 void DemSystem::restore(ContactStore store, double displacement_bound, bool rebuild_due, std::int64_t step,
@@ -63,16 +70,21 @@ void DemSystem::restore(ContactStore store, double displacement_bound, bool rebu
   step_ = step;
   last_sort_step_ = last_sort_step;
   list_valid_ = false;
+  dormant_.clear();
+  integrate_.clear();
+  selection_due_ = true;
 }
 
 void DemSystem::prepare() {
   if (rebuild_due_) {  // without contacts: only wrap and migrate (no ghosts, no neighbour search)
     ScopedPhase t(timers_, t_neigh_);
+    catch_up();
     full_rebuild();
   } else if (!s_.contacts) {
     return;
   } else if (!list_valid_) {
     ScopedPhase t(timers_, t_neigh_);
+    catch_up();
     build_ghosts_and_list();
   } else {
     ScopedPhase t(timers_, t_comm_);
@@ -113,6 +125,7 @@ void DemSystem::full_rebuild() {
     last_sort_step_ = step_;
   }
   if (s_.contacts) build_ghosts_and_list();
+  else classify(nullptr);
   displacement_bound_ = 0.0;
   rebuild_due_ = false;
   ++rebuilds_;
@@ -123,26 +136,176 @@ void DemSystem::build_ghosts_and_list() {
   list_.build(p_, cutoff(), p_.rotation);
   if (p_.rotation) list_.load_history(p_, store_);
   list_valid_ = true;
+  classify(&list_);
+}
+
+void DemSystem::classify(const NeighborList* list) {
+  const std::size_t n = p_.n_owned;
+  force_rows_.clear();
+  referenced_.assign(p_.n_total, 0);
+  if (list) {
+    for (std::int32_t j : list->index) referenced_[static_cast<std::size_t>(j)] = 1;
+    for (std::size_t i = 0; i < n; ++i)
+      if (list->offset[i + 1] > list->offset[i]) {
+        referenced_[i] = 1;
+        force_rows_.push_back(static_cast<std::int32_t>(i));
+      }
+    ghosts_.restrict_forward(referenced_);  // flags the owned sources of referenced ghosts (any rank)
+  }
+  referenced_.resize(n);
+  force_.assign(3 * n, 0.0);
+  if (p_.rotation) torque_.assign(3 * n, 0.0);
+  dormant_.clear();
+  integrate_.clear();
+  selection_due_ = true;
+}
+
+template <class F>
+void DemSystem::with_drive(F&& f) const {
+  if (s_.per_particle_drive) f(PerParticleDrive{p_.a_ext.data()});
+  else f(s_.drive);
+}
+
+void DemSystem::catch_up() const {
+  if (dormant_step_ >= step_ || dormant_.empty()) {
+    dormant_step_ = step_;
+    return;
+  }
+  const std::int64_t steps = step_ - dormant_step_;
+  double* x = p_.x.data();
+  double* v = p_.v.data();
+  const V3 zero{0, 0, 0};
+  // Blocks of kBlock particles side by side (structure of arrays), so that the steps' dependent
+  // kick -> drift chains of different particles run in parallel (SIMD lanes) instead of one particle's
+  // chain after another: the same operations on the same values as kick_drift, step by step.
+  constexpr std::size_t kBlock = 8;
+  const std::size_t nd = dormant_.size();
+  const double dt = kc_.dt;
+  with_drive([&](const auto& drive) {
+    using Drive = std::decay_t<decltype(drive)>;
+    for (std::size_t b0 = 0; b0 < nd; b0 += kBlock) {
+      const std::size_t nb = std::min(kBlock, nd - b0);
+      std::size_t idx[kBlock];
+      alignas(64) double X[3][kBlock], V[3][kBlock], DA[3][kBlock];
+      for (std::size_t m = 0; m < kBlock; ++m) {
+        idx[m] = static_cast<std::size_t>(dormant_[b0 + std::min(m, nb - 1)]);  // short block: repeat the last
+        for (int c = 0; c < 3; ++c) {
+          X[c][m] = x[3 * idx[m] + c];
+          V[c][m] = v[3 * idx[m] + c];
+        }
+      }
+      if constexpr (std::is_same_v<Drive, PerParticleDrive>) {
+        // a = F/m + a_ext with F = 0 does not depend on v: dt a once (kicked_velocity's own expressions)
+        for (std::size_t m = 0; m < kBlock; ++m) {
+          const V3 a = kc_.inv_mass * zero + drive(idx[m], zero);
+          DA[0][m] = dt * a.x;
+          DA[1][m] = dt * a.y;
+          DA[2][m] = dt * a.z;
+        }
+        for (std::int64_t k = 0; k < steps; ++k)
+          for (int c = 0; c < 3; ++c)
+            for (std::size_t m = 0; m < kBlock; ++m) {
+              V[c][m] = V[c][m] + DA[c][m];
+              X[c][m] = X[c][m] + dt * V[c][m];
+            }
+      } else {
+        for (std::int64_t k = 0; k < steps; ++k)
+          for (std::size_t m = 0; m < kBlock; ++m) {
+            const V3 vn = kicked_velocity(idx[m], V3{V[0][m], V[1][m], V[2][m]}, zero, drive, kc_);
+            V[0][m] = vn.x;
+            V[1][m] = vn.y;
+            V[2][m] = vn.z;
+            X[0][m] = X[0][m] + dt * vn.x;
+            X[1][m] = X[1][m] + dt * vn.y;
+            X[2][m] = X[2][m] + dt * vn.z;
+          }
+      }
+      for (std::size_t m = 0; m < nb; ++m) {
+        const std::size_t i = idx[m];
+        for (int c = 0; c < 3; ++c) {
+          x[3 * i + c] = X[c][m];
+          v[3 * i + c] = V[c][m];
+        }
+        // the spin's kick by a zero torque (once is every time: w + 0 does not change after the first)
+        if (p_.rotation) store3(&p_.w[3 * i], kicked_spin(load3(&p_.w[3 * i]), zero, kc_));
+      }
+    }
+  });
+  dormant_step_ = step_;
+}
+
+void DemSystem::select_free_flight() {
+  const std::size_t n = p_.n_owned;
+  integrate_.clear();
+  dormant_.clear();
+  selection_step_ = step_;
+  dormant_step_ = step_;
+  selection_due_ = false;
+  if (!free_flight_) {
+    integrate_.resize(n);
+    for (std::size_t i = 0; i < n; ++i) integrate_[i] = static_cast<std::int32_t>(i);
+    return;
+  }
+  // |v_k| in [|v_0| - k dt A, |v_0| + k dt A] for k <= kHorizon steps, A a bound on |a| over them, widened
+  // by 1e-9 (the rounding of 100 steps is ~1e-14 of it). A per-particle drive is constant: A = |a|. The
+  // uniform drive a = g - lambda v: with 0 <= lambda dt <= 1/2, |v_{k+1}| <= (1 - lambda dt)|v_k| + dt |g|,
+  // so |v_k| <= max(|v_0|, |g|/lambda) and A = |g| + lambda max(|v_0|, |g|/lambda).
+  const double h = static_cast<double>(kHorizon) * s_.dt_s;
+  constexpr double kSlack = 1e-9;
+  double lower_max = 0;
+  const auto accel_bound = [&](const auto& drive, std::size_t i, V3 v, double s) {
+    if constexpr (std::is_same_v<std::decay_t<decltype(drive)>, PerParticleDrive>) {
+      const V3 a = drive(i, v);
+      return std::sqrt(dot(a, a));
+    } else {
+      const double g = std::sqrt(dot(drive.accel, drive.accel)), lambda = drive.drag_rate;
+      return lambda > 0 ? g + lambda * std::max(s, g / lambda) : g;
+    }
+  };
+  with_drive([&](const auto& drive) {
+    for (std::size_t i = 0; i < n; ++i) {
+      if (referenced_[i]) continue;
+      const V3 v = load3(&p_.v[3 * i]);
+      const double s = std::sqrt(dot(v, v)), A = accel_bound(drive, i, v, s);
+      if (std::isfinite(s) && std::isfinite(A)) lower_max = std::max(lower_max, (s - h * A) * (1.0 - kSlack));
+    }
+    for (std::size_t i = 0; i < n; ++i) {
+      bool every_step = referenced_[i] != 0;
+      if (!every_step) {
+        const V3 v = load3(&p_.v[3 * i]);
+        const double s = std::sqrt(dot(v, v)), A = accel_bound(drive, i, v, s);
+        const double upper = (s + h * A) * (1.0 + kSlack);
+        every_step = !(std::isfinite(s) && std::isfinite(A)) || (upper > 0.0 && upper >= lower_max);
+      }
+      (every_step ? integrate_ : dormant_).push_back(static_cast<std::int32_t>(i));
+    }
+  });
 }
 
 void DemSystem::advance() {
   ScopedPhase t(timers_, t_force_);
-  // choose the contact model and the drive once per step, outside the particle loop
-  auto run = [&](const auto& drive) {
-    if (!s_.contacts) {
-      last_stats_ = advance_particles(p_, list_, NoContact{}, drive, kc_);
-    } else if (p_.rotation) {
-      last_stats_ = advance_particles(p_, list_, SpringDashpot<true>{s_.contact}, drive, kc_);
-    } else {
-      last_stats_ = advance_particles(p_, list_, SpringDashpot<false>{s_.contact}, drive, kc_);
-    }
-  };
-  if (s_.per_particle_drive) run(PerParticleDrive{p_.a_ext.data()});
-  else run(s_.drive);
+  if (selection_due_ || step_ - selection_step_ >= kHorizon) {
+    catch_up();
+    select_free_flight();
+  }
+  last_stats_ = KernelStats{};
+  // choose the contact model once per step, outside the particle loop
+  if (!s_.contacts) return;
+  if (p_.rotation)
+    compute_forces(p_, list_, SpringDashpot<true>{s_.contact}, kc_, force_rows_.data(), force_rows_.size(),
+                   force_.data(), torque_.data(), last_stats_);
+  else
+    compute_forces(p_, list_, SpringDashpot<false>{s_.contact}, kc_, force_rows_.data(), force_rows_.size(),
+                   force_.data(), nullptr, last_stats_);
 }
 
 void DemSystem::commit() {
-  p_.swap_buffers();
+  {
+    ScopedPhase t(timers_, t_force_);
+    with_drive([&](const auto& drive) {
+      integrate(p_, force_.data(), torque_.data(), drive, kc_, integrate_.data(), integrate_.size(), last_stats_);
+    });
+  }
   const double time_s = static_cast<double>(step_) * s_.dt_s;
   ++step_;
   // one reduction per step: max speed (for the displacement bound), max overlap, blow-up flag
@@ -181,8 +344,9 @@ void DemSystem::commit() {
 }
 
 Diagnostics DemSystem::diagnostics(bool synchronous) const {
-  const std::vector<double>& v_later = synchronous ? p_.v_next : p_.v;
-  const std::vector<double>& w_later = synchronous ? p_.w_next : p_.w;
+  catch_up();
+  const std::vector<double> v_later = synchronous ? next_velocity() : p_.v;
+  const std::vector<double> w_later = synchronous ? next_angular_velocity() : p_.w;
   Diagnostics d;
   const double m = s_.mass_kg, inertia = 1.0 / kc_.inv_inertia;
   double sums[17] = {0};
@@ -247,17 +411,35 @@ Diagnostics DemSystem::diagnostics(bool synchronous) const {
   return d;
 }
 
-std::vector<double> DemSystem::synchronous_velocity() const {
+std::vector<double> DemSystem::next_velocity() const {
+  catch_up();
   std::vector<double> out(3 * p_.n_owned);
-  for (std::size_t k = 0; k < out.size(); ++k) out[k] = 0.5 * (p_.v[k] + p_.v_next[k]);
+  with_drive([&](const auto& drive) {
+    for (std::size_t i = 0; i < p_.n_owned; ++i)
+      store3(&out[3 * i], kicked_velocity(i, load3(&p_.v[3 * i]), load3(&force_[3 * i]), drive, kc_));
+  });
+  return out;
+}
+
+std::vector<double> DemSystem::next_angular_velocity() const {
+  std::vector<double> out;
+  if (!p_.rotation) return out;
+  catch_up();
+  out.resize(3 * p_.n_owned);
+  for (std::size_t i = 0; i < p_.n_owned; ++i)
+    store3(&out[3 * i], kicked_spin(load3(&p_.w[3 * i]), load3(&torque_[3 * i]), kc_));
+  return out;
+}
+
+std::vector<double> DemSystem::synchronous_velocity() const {
+  std::vector<double> out = next_velocity();
+  for (std::size_t k = 0; k < out.size(); ++k) out[k] = 0.5 * (p_.v[k] + out[k]);
   return out;
 }
 
 std::vector<double> DemSystem::synchronous_angular_velocity() const {
-  std::vector<double> out;
-  if (!p_.rotation) return out;
-  out.resize(3 * p_.n_owned);
-  for (std::size_t k = 0; k < out.size(); ++k) out[k] = 0.5 * (p_.w[k] + p_.w_next[k]);
+  std::vector<double> out = next_angular_velocity();
+  for (std::size_t k = 0; k < out.size(); ++k) out[k] = 0.5 * (p_.w[k] + out[k]);
   return out;
 }
 
@@ -269,7 +451,9 @@ ContactStore DemSystem::contact_store() const {
 }
 
 std::size_t DemSystem::bytes() const {
-  return p_.bytes() + list_.bytes() +
+  return p_.bytes() + list_.bytes() + (force_.capacity() + torque_.capacity()) * sizeof(double) +
+         (force_rows_.capacity() + integrate_.capacity() + dormant_.capacity()) * sizeof(std::int32_t) +
+         referenced_.capacity() +
          (store_.offset.capacity() + store_.partner.capacity()) * sizeof(std::int64_t) +
          store_.xi.capacity() * sizeof(double);
 }

@@ -2,9 +2,24 @@
 // DemSystem: one rank's share of a soft-sphere DEM run -- particles, slab decomposition, ghosts,
 // neighbour list with contact history, and the time step. The run loop (sim/run.hpp) drives it:
 //   prepare()  refresh ghosts, or rebuild (wrap, migrate, sort, ghosts, list) when due
-//   advance()  fused force + leapfrog pass into the next-state buffers
-//   [output of step n from both buffers: x_n and v_n = (v_{n-1/2} + v_{n+1/2})/2]
-//   commit()   swap buffers, reduce the displacement bound, detect blow-ups
+//   advance()  force pass: the force on every particle with neighbours (integrator.hpp)
+//   [output of step n: x_n and v_n = (v_{n-1/2} + v_{n+1/2})/2, v_{n+1/2} formed from the forces]
+//   commit()   integration pass in place, reduce the displacement bound, detect blow-ups
+//
+// Free flight (issue 17). In a dilute suspension most particles have an empty neighbour list: nothing
+// can touch them before the next rebuild, and their step is the drive's kick and a drift. They are
+// not moved every step: they wait (`dormant_`) and are brought up to date -- the same kick_drift, once
+// per step missed, so bit for bit what the integration pass would have done -- whenever anything looks
+// at them: before a rebuild, at particles() (a fluid-step boundary: the coupler reads and writes them),
+// diagnostics, output and checkpoints. A particle stays in the integration pass when a list on any rank
+// refers to it (GhostExchange::restrict_forward), and its ghosts are then the only ones forwarded.
+// The rebuild criterion needs each step's largest speed exactly (it decides the steps of the wraps):
+// a waiting particle's speed after k steps lies within |v_0| -+ k dt |a|, so over a horizon of
+// kHorizon steps only the few whose upper bound reaches the largest lower bound can hold the maximum;
+// those (`candidates`) are integrated every step with the others, so the maximum is the one the plain
+// pass finds, and rebuilds, wraps and trajectories are those of integrating everyone every step.
+// The drive may depend on the velocity (the quiescent fluid's linear drag): the bound on |a| then uses
+// the drag's contraction (select_free_flight).
 #include <mpi.h>
 
 #include <array>
@@ -76,11 +91,24 @@ class DemSystem {
   /// Between advance() and commit(): synchronous velocities of the owned particles (3 per particle).
   std::vector<double> synchronous_velocity() const;
   std::vector<double> synchronous_angular_velocity() const;
+  /// Between advance() and commit(): the half-step velocities v_{n+1/2} (w_{n+1/2}) commit() will give
+  /// the owned particles, in the current order (3 per particle; angular: empty without rotation).
+  std::vector<double> next_velocity() const;
+  std::vector<double> next_angular_velocity() const;
   /// Contact store of the current list (for checkpoints; valid at the top of a step).
   ContactStore contact_store() const;
 
-  const Particles& particles() const { return p_; }
-  Particles& particles() { return p_; }
+  /// The particles, every one at the current step (particles in free flight are brought up to date).
+  /// The non-const access may change the drive (a_ext): free flight then restarts from the new one.
+  const Particles& particles() const {
+    catch_up();
+    return p_;
+  }
+  Particles& particles() {
+    catch_up();
+    selection_due_ = true;
+    return p_;
+  }
   const DemSettings& settings() const { return s_; }
   const SlabDecomposition& slabs() const { return slabs_; }
   std::int64_t step_index() const { return step_; }
@@ -92,6 +120,9 @@ class DemSystem {
   /// Largest overlap / diameter over all ranks at the last committed step.
   double last_max_overlap_rel() const { return last_max_overlap_rel_; }
   std::size_t neighbor_entries() const { return list_.entries(); }
+  /// Owned particles in free flight (not integrated every step) and integrated every step, at the last step.
+  std::size_t free_flight_particles() const { return dormant_.size(); }
+  std::size_t integrated_particles() const { return integrate_.size(); }
   std::size_t ghosts() const { return ghosts_.ghosts(); }
   std::size_t bytes() const;
   double cutoff() const { return s_.diameter_m + s_.skin_m; }
@@ -102,11 +133,22 @@ class DemSystem {
  private:
   void full_rebuild();
   void build_ghosts_and_list();
+  /// After a list build (nullptr: no contacts): the rows with neighbours, the particles some list refers
+  /// to (and the ghosts forward() keeps), zero forces; a new free-flight selection is due.
+  void classify(const NeighborList* list);
+  /// Brings the particles in free flight to the current step (kick_drift once per step missed).
+  void catch_up() const;
+  /// Splits the particles without list references into candidates (integrated every step) and the
+  /// ones in free flight, from their velocities and drive now (see the header).
+  void select_free_flight();
+  template <class F>
+  void with_drive(F&& f) const;
 
   DemSettings s_;
   SlabDecomposition slabs_;
   GhostExchange ghosts_;
-  Particles p_;
+  // mutable: the particles in free flight are brought up to date (catch_up) by const accessors
+  mutable Particles p_;
   NeighborList list_;
   ContactStore store_;
   KernelConstants kc_;
@@ -114,6 +156,18 @@ class DemSystem {
   std::int64_t step_ = 0, last_sort_step_ = -1, rebuilds_ = 0;
   double displacement_bound_ = 0, last_max_overlap_rel_ = 0;
   bool rebuild_due_ = true, list_valid_ = false;
+  // the split step (integrator.hpp): forces of the particles with neighbours, stored between advance()
+  // and commit(), zero for the others; free flight
+  static constexpr std::int64_t kHorizon = 100;      // steps a selection of candidates holds
+  std::vector<double> force_, torque_;               // 3 per owned particle
+  std::vector<std::int32_t> force_rows_;             // owned particles with a non-empty list
+  std::vector<char> referenced_;                     // per owned: a list (any rank) refers to it or has one
+  std::vector<std::int32_t> integrate_;              // integrated every step (increasing)
+  mutable std::vector<std::int32_t> dormant_;        // in free flight (increasing)
+  mutable std::int64_t dormant_step_ = 0;            // the step the particles in free flight are at
+  std::int64_t selection_step_ = 0;
+  bool selection_due_ = true;
+  bool free_flight_ = false;                         // the drive allows it
   PhaseTimers timers_;
   std::size_t t_neigh_, t_comm_, t_force_;
 };

@@ -75,6 +75,7 @@ inline std::vector<StepState> recorded_step(DemSystem& sys, std::size_t count) {
   sys.prepare();
   sys.advance();
   const Particles& p = sys.particles();
+  const std::vector<double> v_next = sys.next_velocity(), w_next = sys.next_angular_velocity();
   std::vector<StepState> out(count);
   for (std::size_t i = 0; i < p.n_owned; ++i) {
     const auto id = static_cast<std::size_t>(p.id[i]);
@@ -82,10 +83,10 @@ inline std::vector<StepState> recorded_step(DemSystem& sys, std::size_t count) {
     StepState& s = out[id];
     s.x = load3(&p.x[3 * i]);
     s.v_half_before = load3(&p.v[3 * i]);
-    s.v_half_after = load3(&p.v_next[3 * i]);
+    s.v_half_after = load3(&v_next[3 * i]);
     if (p.rotation) {
       s.w_half_before = load3(&p.w[3 * i]);
-      s.w_half_after = load3(&p.w_next[3 * i]);
+      s.w_half_after = load3(&w_next[3 * i]);
     }
   }
   sys.commit();

@@ -63,3 +63,28 @@ TEST(CouplingKernel, UniformLatticeDepositsUniformly) {
 }
 
 }  // namespace
+
+// The kept stencil (issue 17: computed once per fluid step) gives the kernel's cells, order and weights bit
+// for bit, particles outside the box in x and z (unwrapped positions) and near the slab's faces included.
+TEST(CouplingKernel, KeptStencilMatchesTheKernelBitForBit) {
+  cgd::coupling::GridView g;
+  g.cells = {5, 12, 4};
+  g.spacing = {0.31, 0.27, 0.45};
+  g.j0 = 3;
+  g.ny_local = 6;
+  std::mt19937_64 rng(11);
+  std::uniform_real_distribution<double> ux(-0.4, 5 * 0.31 + 0.4), uy(3 * 0.27 + 1e-3, 9 * 0.27 - 1e-3),
+      uz(-0.5, 4 * 0.45 + 0.5);
+  for (int t = 0; t < 2000; ++t) {
+    const double x[3] = {ux(rng), uy(rng), uz(rng)};
+    std::vector<std::pair<std::size_t, double>> a, b;
+    cgd::coupling::for_each_tsc_cell(g, x, [&](std::size_t c, double w) { a.emplace_back(c, w); });
+    const cgd::coupling::Stencil st = cgd::coupling::make_stencil(g, x);
+    cgd::coupling::for_each_stencil_cell(g, st, [&](std::size_t c, double w) { b.emplace_back(c, w); });
+    ASSERT_EQ(a.size(), b.size());
+    for (std::size_t k = 0; k < a.size(); ++k) {
+      EXPECT_EQ(a[k].first, b[k].first);
+      EXPECT_EQ(a[k].second, b[k].second);  // exact
+    }
+  }
+}

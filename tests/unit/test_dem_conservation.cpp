@@ -201,7 +201,7 @@ TEST(DemConservation, AngularMomentumAcrossFrictionalCollisions) {
       const cgd::dem::Particles& p = sys.particles();
       const std::size_t i0 = local_index(sys, 0), i1 = local_index(sys, 1);
       const V3 xi = load3(&p.x[3 * i0]), xj = load3(&p.x[3 * i1]);
-      const V3 impulse = pp.mass * (load3(&p.v_next[3 * i0]) - load3(&p.v[3 * i0]));  // on particle 0
+      const V3 impulse = pp.mass * (load3(&sys.next_velocity()[3 * i0]) - load3(&p.v[3 * i0]));  // on particle 0
       const double overlap = pp.d - norm(xi - xj);
       if (overlap > 0) {
         const V3 nk = normalized(xi - xj);

@@ -103,7 +103,7 @@ TEST(DemEffects, FrictionOffAllocatesNoRotation) {
     }
     EXPECT_FALSE(sys.particles().rotation);
     EXPECT_TRUE(sys.particles().w.empty());
-    EXPECT_TRUE(sys.particles().w_next.empty());
+    EXPECT_TRUE(sys.next_angular_velocity().empty());
     EXPECT_GT(sys.neighbor_entries(), 0u);
     EXPECT_GT(contacts, 0.0) << "the gas should have collided";
   }
