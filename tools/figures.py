@@ -46,9 +46,12 @@ def main():
 
     def coarse_curves(ax, candidates, x, x_format):
         """The coarse configurations among `candidates` against `x`: one curve and table rows per law (the micro
-        law open; the parcel fit's modelraw runs left out)."""
+        law open; the parcel fit's modelraw runs left out, unless there are no model runs: then they are the
+        fitted model, drawn as such with c_corr off)."""
+        has_model = any(r["kind"] == "coarse" and r["drag"] == "model" for r in candidates)
+        raw = () if has_model else (("modelraw", "b", "fitted model (c_corr off)", dict()),)
         for name, color, label, style in (("micro", "k", "micro law", dict(mfc="white")),
-                                          ("model", "b", "fitted model", dict()),
+                                          ("model", "b", "fitted model", dict()), *raw,
                                           ("radl2014", "g", "Radl 2014", dict(marker="v")),
                                           ("perfect", "m", "perfect closure", dict(marker="*", ms=9))):
             pts = sorted([r for r in candidates if r["kind"] == "coarse" and r["drag"] == name], key=lambda r: r[x])
