@@ -23,6 +23,26 @@ void write_vector(h5::File& f, const std::string& name, const std::vector<double
   f.write_replicated(name, v, {static_cast<std::uint64_t>(v.size())});
 }
 
+/// /c_corr: c_corr = a + (1 - a) exp(-k (alpha - 1)), not fitted here (the parcel fit writes its own copy).
+void write_c_corr(h5::File& f, double a, double k, const std::string& source) {
+  f.create_group("/c_corr");
+  f.set_attr("/c_corr", "a", a);
+  f.set_attr("/c_corr", "k", k);
+  f.set_attr("/c_corr", "source", source);
+  f.set_attr("/c_corr", "fitted", std::int64_t{0});
+  f.set_attr("/c_corr", "formula", std::string("c_corr = a + (1 - a) exp(-k (alpha - 1))"));
+}
+
+/// /sources: the filtered files a model was made from, with their checksums.
+void write_sources(h5::File& f, const std::vector<FilteredFile>& files) {
+  f.create_group("/sources");
+  std::vector<std::string> paths, sums;
+  for (const FilteredFile& ff : files) paths.push_back(ff.path), sums.push_back(ff.checksum);
+  f.set_attr("/sources", "files", paths);
+  f.set_attr("/sources", "checksums", sums);
+  f.set_attr("/sources", "checksum_kind", std::string("FNV-1a 64-bit of the file's bytes, hex"));
+}
+
 void write_spline(h5::File& f, const std::string& group, const BSpline& s, const std::string& meaning) {
   f.create_group(group);
   f.set_attr(group, "order", static_cast<std::int64_t>(s.order));
@@ -94,12 +114,7 @@ void write_model_file(const std::string& path, const FitResult& R, const std::ve
         "h(phi_max) above");
     write_spline(f, "/log_a", M.log_a_spline,
                  "S(phi) = log a(phi); a = exp(clip(S(clip(phi, phi_crit, phi_max)), log_a_min, log_a_max))");
-    f.create_group("/c_corr");
-    f.set_attr("/c_corr", "a", M.c_corr_a);
-    f.set_attr("/c_corr", "k", M.c_corr_k);
-    f.set_attr("/c_corr", "source", M.c_corr_source);
-    f.set_attr("/c_corr", "fitted", std::int64_t{0});
-    f.set_attr("/c_corr", "formula", std::string("c_corr = a + (1 - a) exp(-k (alpha - 1))"));
+    write_c_corr(f, M.c_corr_a, M.c_corr_k, M.c_corr_source);
 
     // bands
     f.create_group("/bands");
@@ -224,13 +239,7 @@ void write_model_file(const std::string& path, const FitResult& R, const std::ve
       f.write_replicated(d + "/cv_points", cpts, {cpts.size()});
     }
 
-    // sources
-    f.create_group("/sources");
-    std::vector<std::string> paths, sums;
-    for (const FilteredFile& ff : files) paths.push_back(ff.path), sums.push_back(ff.checksum);
-    f.set_attr("/sources", "files", paths);
-    f.set_attr("/sources", "checksums", sums);
-    f.set_attr("/sources", "checksum_kind", std::string("FNV-1a 64-bit of the file's bytes, hex"));
+    write_sources(f, files);
   });
 }
 
@@ -328,18 +337,8 @@ std::string write_grid_table_model(const std::string& path, const std::vector<Fi
     f.set_attr("/table", "min_count", min_count);
     // c_corr = 1 (a = 1, k = 0): the table is the grid's a-priori closure alone; what parcels miss is measured
     // against it, not folded into it
-    f.create_group("/c_corr");
-    f.set_attr("/c_corr", "a", 1.0);
-    f.set_attr("/c_corr", "k", 0.0);
-    f.set_attr("/c_corr", "source", std::string("none"));
-    f.set_attr("/c_corr", "fitted", std::int64_t{0});
-    f.set_attr("/c_corr", "formula", std::string("c_corr = a + (1 - a) exp(-k (alpha - 1))"));
-    f.create_group("/sources");
-    std::vector<std::string> paths, sums;
-    for (const FilteredFile& ff : files) paths.push_back(ff.path), sums.push_back(ff.checksum);
-    f.set_attr("/sources", "files", paths);
-    f.set_attr("/sources", "checksums", sums);
-    f.set_attr("/sources", "checksum_kind", std::string("FNV-1a 64-bit of the file's bytes, hex"));
+    write_c_corr(f, 1.0, 0.0, "none");
+    write_sources(f, files);
   });
   std::ostringstream out;
   out << "cgd-fit --grid-table " << cells_across << ": the a-priori H_grid of the grid of " << cells_across
