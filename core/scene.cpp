@@ -1034,8 +1034,9 @@ Scene build_scene(const SceneReader& in, const ToolAccepts& accepts) {
     s.warnings.push_back("fluid.drag = \"stokes\" at Re_p = " + SceneReader::format_short(x.re_p) +
                          ": Stokes drag holds for Re_p << 1 and underestimates the drag here by 1 + 0.15 Re^0.687 = " +
                          SceneReader::format_short(1.0 + 0.15 * std::pow(x.re_p, 0.687)));
-  // Measured peak per particle (bench/README.md): ~300 B of DEM arrays (double-buffered state, neighbour
-  // list with history, ghosts) plus placement and I/O buffers: 450 B is the peak seen at 200k-600k particles.
+  // Measured peak per particle (bench/README.md): ~300 B of DEM arrays (state, neighbour list with
+  // history, ghosts; measured before the in-place integration of issue 17 dropped the second state buffer, so now
+  // a little high) plus placement and I/O buffers: 450 B is the peak seen at 200k-600k particles.
   x.memory_estimate_bytes = count * 450.0;
   if (s.solves_fluid())
     x.memory_estimate_bytes +=

@@ -569,11 +569,12 @@ class RunDriver {
   /// The peak memory of the run (all ranks), estimated before the loop: what is resident after setup
   /// (libraries, MPI and FFTW buffers, particles, placement or checkpoint reading, the fluid grid and its
   /// solver) plus what the loop still allocates: per rank, the HDF5 / MPI-IO buffers of the first file
-  /// written; per particle, the neighbour list with its history slots, ghosts, the second state buffer
+  /// written; per particle, the neighbour list with its history slots, ghosts, the force arrays
   /// and the snapshot copies (and in coupled runs the coupling's per-particle fields); per cell, the
   /// snapshot's file-order fields. The growth coefficients are measured (peak resident set minus the
   /// resident set here, 3k-200k particles, dry and coupled, 1 and 2 ranks): the estimate came within 7 %
-  /// of the measured peak in every case. Collective.
+  /// of the measured peak in every case. They were measured with the second state buffer that the in-place
+  /// integration (issue 17) removed (about 24-48 B per particle): the estimate is now a little high. Collective.
   void estimate_memory() {
     constexpr double kPerRank = 5.0 * kMiB;
     const double per_particle = coupled_ ? 250.0 : 60.0;  // bytes
