@@ -19,6 +19,7 @@
 #include <numeric>
 #include <ostream>
 #include <set>
+#include <sstream>
 
 #include "core/error.hpp"
 
@@ -505,7 +506,7 @@ FitResult fit_filtered_drag(const std::vector<FilteredFile>& files, const FitOpt
   if (static_cast<int>(widths.size()) < o.min_widths)
     throw InputError(file_list(files) + ": too few filter widths to fit h(phi) and a(phi): " +
                      std::to_string(widths.size()) + " distinct width(s) (groups /width_<k>) of at least " +
-                     std::to_string(o.min_width_over_cell) + " cells (" + std::to_string(narrow) +
+                     [&] { std::ostringstream m; m << o.min_width_over_cell; return m.str(); }() + " cells (" + std::to_string(narrow) +
                      " narrower not used), at least " + std::to_string(o.min_widths) +
                      " needed (2 parameters per bin + 1 degree of freedom)");
 
