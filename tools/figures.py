@@ -90,9 +90,14 @@ def main():
             ax.axhline(r["slip"], color="r", lw=1)
         coarse_curves(ax, [r for r in rows if r["phi"] == phi and abs(r["cell_over_dp"] - coarsest) < 1e-6], "alpha", "5.0f")
         ax.set_xlabel("parcel size α")
+        # ticks at the parcel sizes run (alpha is an integer: no 1.5 or 2.5)
+        ax.set_xticks(sorted({r["alpha"] for r in rows if r["phi"] == phi and r["kind"] == "coarse"
+                              and abs(r["cell_over_dp"] - coarsest) < 1e-6}))
         ax.set_title(f"⟨φ⟩ = {phi:g}, Δ = {coarsest:.3g} d_p", fontsize=10)
         ax.set_ylabel("⟨u_slip,y⟩ / u_t")
-        ax.legend(fontsize=7)
+    # one legend, outside the panels: inside one it hid points
+    handles, labels = max((ax.get_legend_handles_labels() for ax in axes[0]), key=lambda hl: len(hl[1]))
+    axes[0][-1].legend(handles, labels, fontsize=7, loc="upper left", bbox_to_anchor=(1.02, 1.0))
     fig.tight_layout()
     fig.savefig(prefix + "_figure3.png", dpi=120)
     print(f"\nwrote {prefix}_figure2.png, {prefix}_figure3.png")
