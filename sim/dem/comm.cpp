@@ -54,6 +54,24 @@ std::int64_t double_to_bits(double d) {
   std::memcpy(&i, &d, sizeof i);
   return i;
 }
+/// One particle's forward record: position shifted by the swap's periodic image, velocity, and the angular
+/// velocity when rotation is simulated (6 or 9 doubles).
+inline void pack_one(const Particles& p, std::int32_t i, const std::array<double, 3>& shift, double* out) {
+  const double* xi = &p.x[3 * i];
+  const double* vi = &p.v[3 * i];
+  out[0] = xi[0] + shift[0];
+  out[1] = xi[1] + shift[1];
+  out[2] = xi[2] + shift[2];
+  out[3] = vi[0];
+  out[4] = vi[1];
+  out[5] = vi[2];
+  if (p.rotation) {
+    const double* wi = &p.w[3 * i];
+    out[6] = wi[0];
+    out[7] = wi[1];
+    out[8] = wi[2];
+  }
+}
 }  // namespace
 
 void GhostExchange::pack(const Particles& p, const Swap& s, std::vector<double>& buf) const {
@@ -61,20 +79,7 @@ void GhostExchange::pack(const Particles& p, const Swap& s, std::vector<double>&
   buf.resize(s.send.size() * per);
   double* out = buf.data();
   for (std::int32_t i : s.send) {
-    const double* xi = &p.x[3 * i];
-    const double* vi = &p.v[3 * i];
-    out[0] = xi[0] + s.shift[0];
-    out[1] = xi[1] + s.shift[1];
-    out[2] = xi[2] + s.shift[2];
-    out[3] = vi[0];
-    out[4] = vi[1];
-    out[5] = vi[2];
-    if (p.rotation) {
-      const double* wi = &p.w[3 * i];
-      out[6] = wi[0];
-      out[7] = wi[1];
-      out[8] = wi[2];
-    }
+    pack_one(p, i, s.shift, out);
     out += per;
   }
 }
@@ -85,20 +90,7 @@ void GhostExchange::pack_live(const Particles& p, const Swap& s, std::vector<dou
   double* out = buf.data();
   for (std::int32_t k : s.live_send) {
     const std::int32_t i = s.send[k];
-    const double* xi = &p.x[3 * i];
-    const double* vi = &p.v[3 * i];
-    out[0] = xi[0] + s.shift[0];
-    out[1] = xi[1] + s.shift[1];
-    out[2] = xi[2] + s.shift[2];
-    out[3] = vi[0];
-    out[4] = vi[1];
-    out[5] = vi[2];
-    if (p.rotation) {
-      const double* wi = &p.w[3 * i];
-      out[6] = wi[0];
-      out[7] = wi[1];
-      out[8] = wi[2];
-    }
+    pack_one(p, i, s.shift, out);
     out += per;
   }
 }
