@@ -12,16 +12,40 @@
 
 namespace cgd {
 
-std::optional<DragLaw> microscopic_drag_law(std::string_view name) {
-  for (DragLaw law : {DragLaw::Stokes, DragLaw::WenYu, DragLaw::Beetstra})
-    if (name == to_string(law)) return law;
+std::optional<DragLaw> drag_law_from_name(std::string_view name) {
+  for (const DragLawInfo& row : kDragLaws)
+    if (name == row.name) return row.law;
   return std::nullopt;
 }
 
+std::optional<DragLaw> microscopic_drag_law(std::string_view name) {
+  const auto law = drag_law_from_name(name);
+  if (law && is_microscopic(*law)) return law;
+  return std::nullopt;
+}
+
+namespace {
+std::string quoted_names(bool (*keep)(const DragLawInfo&)) {
+  std::string out;
+  for (const DragLawInfo& row : kDragLaws)
+    if (keep(row)) out += (out.empty() ? "\"" : ", \"") + std::string(row.name) + "\"";
+  return out;
+}
+}  // namespace
+
+std::string drag_law_names(DragKind kind) {
+  return kind == DragKind::Micro ? quoted_names([](const DragLawInfo& r) { return r.kind == DragKind::Micro; })
+                                 : quoted_names([](const DragLawInfo& r) { return r.kind == DragKind::Filtered; });
+}
+
+std::string drag_law_names() {
+  return quoted_names([](const DragLawInfo&) { return true; });
+}
+
 void throw_drag_law_needs_model(DragLaw law) {
-  throw InputError(std::string("drag law \"") + to_string(law) +
-                   "\" needs a filtered model file; only \"stokes\", \"wen-yu\" and \"beetstra\" are "
-                   "microscopic laws that can be evaluated from the fluid and particle parameters alone");
+  throw InputError(std::string("drag law \"") + to_string(law) + "\" needs a filtered model file; only the " +
+                   "microscopic laws (" + drag_law_names(DragKind::Micro) +
+                   ") can be evaluated from the fluid and particle parameters alone");
 }
 
 double beta_p(DragLaw law, const DragParams& params, double phi, double slip_speed) {

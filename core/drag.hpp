@@ -12,11 +12,65 @@
 #include <cmath>
 #include <functional>
 #include <optional>
+#include <string>
 #include <string_view>
+#include <type_traits>
 
-#include "core/scene.hpp"
+// ---- The drag-law table ------------------------------------------------------------------------
+// One row a law: X(enum value, name in scenes and files, kind, evaluator, what it is). Everything that
+// names or chooses a law is derived from it: the enum DragLaw, to_string(DragLaw), drag_law_from_name
+// and microscopic_drag_law (the filter, the fit, the model file's base_drag), the allowed values of the
+// scene's fluid.drag, the messages that list the laws (drag_law_names), and visit_drag_law. A micro law
+// names its evaluator struct (below); a filtered law (kind Filtered) names `void`: it is evaluated by
+// visit_any_drag_law in core/filtered_drag.hpp from a model's curves on top of a micro law. The order of
+// the rows is the order the laws are offered in messages; the first is the scene's default.
+// Adding a microscopic law (docs/howto.md "A new drag law"): its evaluator struct below, one row here,
+// and its rows in docs/models.md and docs/scene-keys.md (tests/unit/test_drag.cpp checks the docs).
+#define CGD_DRAG_LAWS(X)                                                                                \
+  X(Beetstra, "beetstra", Micro, BeetstraDrag, "Beetstra, van der Hoef & Kuipers (2007)")               \
+  X(WenYu, "wen-yu", Micro, WenYuDrag, "Wen & Yu (1966)")                                               \
+  X(Stokes, "stokes", Micro, StokesDrag, "Stokes drag on a single sphere")                              \
+  X(Radl2014, "radl2014", Filtered, void, "Radl & Sundaresan (2014), the published master curves")      \
+  X(Model, "model", Filtered, void, "a model file written by cgd-fit (fluid.drag_model = PATH)")
 
 namespace cgd {
+
+#define CGD_DRAG_LAW_ENUM(id, name, kind, evaluator, what) id,
+/// The drag laws of the table CGD_DRAG_LAWS, in its order.
+enum class DragLaw { CGD_DRAG_LAWS(CGD_DRAG_LAW_ENUM) };
+#undef CGD_DRAG_LAW_ENUM
+
+/// Micro: evaluated from DragParams alone (core/drag.hpp). Filtered: a coarse-grid law that needs a
+/// model (core/filtered_drag.hpp), refused by resolved runs.
+enum class DragKind { Micro, Filtered };
+
+/// One row of the drag-law table.
+struct DragLawInfo {
+  DragLaw law;
+  const char* name;  // as scenes and files spell it
+  DragKind kind;
+  const char* what;  // a few words for messages and docs
+};
+
+#define CGD_DRAG_LAW_INFO(id, name, kind, evaluator, what) DragLawInfo{DragLaw::id, name, DragKind::kind, what},
+/// The drag-law table as data, in its order.
+inline constexpr DragLawInfo kDragLaws[] = {CGD_DRAG_LAWS(CGD_DRAG_LAW_INFO)};
+#undef CGD_DRAG_LAW_INFO
+
+/// The table's row of `law`.
+constexpr const DragLawInfo& drag_law_info(DragLaw law) { return kDragLaws[static_cast<int>(law)]; }
+/// The law's name in scenes and files ("beetstra", "wen-yu", ...).
+constexpr const char* to_string(DragLaw law) { return drag_law_info(law).name; }
+constexpr bool is_microscopic(DragLaw law) { return drag_law_info(law).kind == DragKind::Micro; }
+
+/// The law of a name as scenes and files spell it, of any kind; nullopt for an unknown name.
+std::optional<DragLaw> drag_law_from_name(std::string_view name);
+
+/// The names of the laws of `kind`, in the table's order, quoted and joined by ", ":
+/// "\"beetstra\", \"wen-yu\", \"stokes\"" for DragKind::Micro. For messages that list what is allowed.
+std::string drag_law_names(DragKind kind);
+/// Every law's name, quoted and joined by ", ", in the table's order.
+std::string drag_law_names();
 
 /// Parameters shared by every microscopic law.
 struct DragParams {
@@ -143,30 +197,34 @@ struct BeetstraDrag {
   double re_per_slip_;  // rho_f d / mu_f, s/m
 };
 
-/// The microscopic law of a name as files and scenes spell it (to_string: "stokes", "wen-yu", "beetstra");
+/// The microscopic law of a name as files and scenes spell it (a row of kind Micro in CGD_DRAG_LAWS);
 /// nullopt for any other name, the filtered laws ("radl2014", "model") included.
 std::optional<DragLaw> microscopic_drag_law(std::string_view name);
 
-/// Throws InputError: `law` (Radl2014, Model) is a filtered model, which needs a model file and
+/// Throws InputError: `law` (kind Filtered) is a filtered model, which needs a model file and
 /// cannot be built from DragParams alone.
 [[noreturn]] void throw_drag_law_needs_model(DragLaw law);
 
-/// Chooses the microscopic evaluator for `law` once and calls visit(evaluator); use it outside hot
-/// loops, e.g. visit_drag_law(law, p, [&](const auto& drag) { loop calling drag.beta_p(...); }).
-/// Throws InputError for DragLaw::Radl2014 and DragLaw::Model.
+namespace detail {
+template <class Evaluator, class Visitor>
+decltype(auto) visit_evaluator(const DragParams& params, Visitor&& visit) {
+  return visit(Evaluator(params));
+}
+}  // namespace detail
+
+/// Chooses the microscopic evaluator for `law` once (the table's evaluator column) and calls
+/// visit(evaluator); use it outside hot loops, e.g.
+/// visit_drag_law(law, p, [&](const auto& drag) { loop calling drag.beta_p(...); }).
+/// Throws InputError for the filtered laws (use visit_any_drag_law, core/filtered_drag.hpp).
 template <class Visitor>
 decltype(auto) visit_drag_law(DragLaw law, const DragParams& params, Visitor&& visit) {
-  switch (law) {
-    case DragLaw::Stokes:
-      return visit(StokesDrag(params));
-    case DragLaw::WenYu:
-      return visit(WenYuDrag(params));
-    case DragLaw::Beetstra:
-      return visit(BeetstraDrag(params));
-    case DragLaw::Radl2014:
-    case DragLaw::Model:
-      break;
-  }
+#define CGD_DRAG_LAW_CASE(id, name, kind, evaluator, what)                                  \
+  case DragLaw::id:                                                                         \
+    if constexpr (DragKind::kind == DragKind::Micro)                                        \
+      return detail::visit_evaluator<evaluator>(params, std::forward<Visitor>(visit));      \
+    break;
+  switch (law) { CGD_DRAG_LAWS(CGD_DRAG_LAW_CASE) }
+#undef CGD_DRAG_LAW_CASE
   throw_drag_law_needs_model(law);
 }
 

@@ -238,7 +238,7 @@ DragModel load_drag_model(const std::string& path) {
   else
     throw InputError(
         path + ": base_drag = \"" + base +
-        "\": a model's base law must be a microscopic law (\"beetstra\", \"wen-yu\", \"stokes\")");
+        "\": a model's base law must be a microscopic law (" + drag_law_names(DragKind::Micro) + ")");
   m.u_t_convention = f.attr_string("/", "u_t_convention");
   if (m.u_t_convention != kUtConvention)
     throw InputError(path + ": u_t_convention = \"" + m.u_t_convention + "\": this build uses \"" +

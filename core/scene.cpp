@@ -55,22 +55,6 @@ const char* to_string(Coupling c) {
   return "?";
 }
 
-const char* to_string(DragLaw d) {
-  switch (d) {
-    case DragLaw::Beetstra:
-      return "beetstra";
-    case DragLaw::WenYu:
-      return "wen-yu";
-    case DragLaw::Stokes:
-      return "stokes";
-    case DragLaw::Radl2014:
-      return "radl2014";
-    case DragLaw::Model:
-      return "model";
-  }
-  return "?";
-}
-
 namespace {
 
 // ---- schema --------------------------------------------------------------------------------------
@@ -699,36 +683,26 @@ double norm(const Vec3& v) {
   return std::sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
 }
 
-/// fluid.drag: the laws the tool accepts. The microscopic laws serve every run; the filtered laws
-/// (radl2014, model) belong to coarse-grid runs, and a tool that refuses them (cgd-generate) neither
-/// offers them nor accepts them.
+/// fluid.drag: the laws the tool accepts (the drag-law table of core/drag.hpp). The microscopic laws serve
+/// every run; the filtered laws belong to coarse-grid runs, and a tool that refuses them (cgd-generate)
+/// neither offers them nor accepts them.
 DragLaw drag_law(const SceneReader& in, const ToolAccepts& accepts) {
   const auto given = in.string("fluid", "drag");
   if (!given) return FluidConfig{}.drag;
-  const std::vector<DragLaw> microscopic = {DragLaw::Beetstra, DragLaw::WenYu, DragLaw::Stokes};
-  const std::vector<DragLaw> filtered = {DragLaw::Radl2014, DragLaw::Model};
-  const auto quoted_names = [](const std::vector<DragLaw>& laws) {
-    std::vector<std::string> names;
-    for (const DragLaw law : laws) names.push_back(quote(to_string(law)));
-    return join(names, ", ");
-  };
-  for (const DragLaw law : microscopic)
-    if (*given == to_string(law)) return law;
-  for (const DragLaw law : filtered)
-    if (*given == to_string(law)) {
-      if (accepts.filtered_drag) return law;
-      in.fail_value("fluid", "drag",
-                    "a filtered drag model belongs to coarse-grid runs (cgd-coarse); this tool runs resolved "
-                    "simulations, which take a microscopic law: " +
-                        quoted_names(microscopic));
-    }
-  std::vector<DragLaw> offered = microscopic;
-  if (accepts.filtered_drag) offered.insert(offered.end(), filtered.begin(), filtered.end());
+  const std::string micro = drag_law_names(DragKind::Micro);
+  if (const auto law = drag_law_from_name(*given)) {
+    if (is_microscopic(*law) || accepts.filtered_drag) return *law;
+    in.fail_value("fluid", "drag",
+                  "a filtered drag model belongs to coarse-grid runs (cgd-coarse); this tool runs resolved "
+                  "simulations, which take a microscopic law: " +
+                      micro);
+  }
   std::vector<std::string> names;
-  for (const DragLaw law : offered) names.emplace_back(to_string(law));
-  std::string rule = "must be one of " + quoted_names(offered);
+  for (const DragLawInfo& row : kDragLaws)
+    if (row.kind == DragKind::Micro || accepts.filtered_drag) names.emplace_back(row.name);
+  std::string rule = "must be one of " + (accepts.filtered_drag ? drag_law_names() : micro);
   rule += accepts.filtered_drag
-              ? " (" + quoted_names(microscopic) + ": microscopic laws; " + quoted_names(filtered) +
+              ? " (" + micro + ": microscopic laws; " + drag_law_names(DragKind::Filtered) +
                     ": filtered laws of coarse-grid runs, \"model\" with fluid.drag_model = PATH)"
               : " (microscopic drag law; the filtered laws belong to coarse-grid runs, cgd-coarse)";
   if (auto near = closest(*given, names)) rule += "; did you mean " + quote(*near) + "?";

@@ -8,6 +8,8 @@
 #include <string>
 #include <vector>
 
+#include "core/drag.hpp"  // DragLaw: the drag-law table
+
 namespace cgd {
 
 using Vec3 = std::array<double, 3>;
@@ -41,7 +43,6 @@ struct ContactConfig {
 };
 
 enum class Coupling { Quiescent, OneWay, TwoWay };
-enum class DragLaw { Stokes, WenYu, Beetstra, Radl2014, Model };
 
 struct FluidConfig {
   double density_kg_m3 = 1.3;
@@ -152,9 +153,8 @@ std::vector<std::string> restart_differences(const std::string& checkpoint_toml,
 /// Human-readable table of the effects that are on and the derived numbers (printed at start).
 std::string describe_scene(const Scene& scene);
 
-/// Names used in files and messages.
+/// Names used in files and messages (to_string(DragLaw) is in core/drag.hpp, from the drag-law table).
 const char* to_string(ContactModel m);
 const char* to_string(Coupling c);
-const char* to_string(DragLaw d);
 
 }  // namespace cgd

@@ -33,7 +33,8 @@ DragLaw micro_law(const RunPlan& run) {
   const std::string& d = run.physics.drag;
   if (const auto law = microscopic_drag_law(d)) return *law;
   throw InputError(run.path + ": the run's drag law is '" + d +
-                   "'; the filter normalises by a microscopic law (beetstra, wen-yu, stokes): a resolved run uses one");
+                   "'; the filter normalises by a microscopic law (" + drag_law_names(DragKind::Micro) +
+                   "): a resolved run uses one");
 }
 
 DragParams drag_params(const RunPhysics& p) { return DragParams{p.fluid_density_kg_m3, p.fluid_viscosity_Pa_s, p.diameter_m}; }

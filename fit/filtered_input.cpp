@@ -59,7 +59,7 @@ FilteredFile read_filtered_file(const std::string& path) {
   out.scene_toml = f.attr_string("/", "scene");
   if (!microscopic_drag_law(p.micro_drag))
     throw InputError(path + ": micro_drag = \"" + p.micro_drag +
-                     "\": the runs' law must be a microscopic law (\"beetstra\", \"wen-yu\", \"stokes\")");
+                     "\": the runs' law must be a microscopic law (" + drag_law_names(DragKind::Micro) + ")");
   if (!(p.l_char_m > 0)) throw InputError(path + ": l_char_m = " + number(p.l_char_m) + ": must be > 0");
 
   need("/bins/phi_edges");

@@ -12,7 +12,7 @@ int main(int argc, char** argv) {
   const int status = cgd::run_tool([&] {
     const cgd::RunOptions options = cgd::parse_run_command_line(
         argc, argv, "cgd-generate", "Resolved CFD-DEM run of a scene: snapshots of particles (and fluid) for filtering");
-    // A resolved run resolves the clusters: it uses a microscopic law; the filtered laws (radl2014, model)
+    // A resolved run resolves the clusters: it uses a microscopic law; the filtered laws (kind Filtered in core/drag.hpp)
     // belong to coarse-grid runs (cgd-coarse), and the scene's drag error offers only what this tool runs.
     const cgd::Scene scene = cgd::load_scene(options.scene_path, options.overrides, cgd::kResolvedRunAccepts);
     cgd::RunSettings settings;

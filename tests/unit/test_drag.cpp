@@ -39,7 +39,10 @@
 
 #include <cmath>
 #include <cstddef>
+#include <cstdlib>
+#include <fstream>
 #include <limits>
+#include <sstream>
 #include <string>
 
 #include "core/drag.hpp"
@@ -160,6 +163,46 @@ TEST(DragPins, FilteredLawsNeedAModelFile) {
     }
     EXPECT_THROW(cgd::homogeneous_slip_over_ut(law, kParams, 0.1, kRhoP, kG, 0.2), cgd::InputError);
     EXPECT_THROW(cgd::terminal_velocity(law, kParams, kRhoP, kG), cgd::InputError);
+  }
+}
+
+// ---- the drag-law table --------------------------------------------------------------------------
+
+// Every row of the table CGD_DRAG_LAWS round-trips through its name, is of the kind the name parser
+// says, and is in the documentation: docs/models.md names it in backquotes, docs/scene-keys.md offers
+// it as a value of fluid.drag. A law added to the table without its docs fails here.
+std::string read_doc(const std::string& relative) {
+  const char* s = std::getenv("CGD_SOURCE_DIR");
+  const std::string path = std::string(s ? s : CGD_SOURCE_DIR_DEFAULT) + "/" + relative;
+  std::ifstream in(path);
+  EXPECT_TRUE(in.good()) << "cannot read " << path;
+  std::ostringstream text;
+  text << in.rdbuf();
+  return text.str();
+}
+
+TEST(DragTable, NamesRoundTripAndKindsAreConsistent) {
+  int index = 0;
+  for (const cgd::DragLawInfo& row : cgd::kDragLaws) {
+    EXPECT_EQ(static_cast<int>(row.law), index++) << row.name << ": the enum follows the table's order";
+    EXPECT_EQ(cgd::drag_law_from_name(row.name), row.law) << row.name;
+    EXPECT_STREQ(cgd::to_string(row.law), row.name);
+    EXPECT_EQ(cgd::microscopic_drag_law(row.name).has_value(), row.kind == cgd::DragKind::Micro) << row.name;
+    EXPECT_NE(cgd::drag_law_names().find(std::string("\"") + row.name + "\""), std::string::npos) << row.name;
+  }
+  EXPECT_FALSE(cgd::drag_law_from_name("ergun").has_value());
+  EXPECT_EQ(cgd::drag_law_names(cgd::DragKind::Micro), "\"beetstra\", \"wen-yu\", \"stokes\"");
+  EXPECT_EQ(cgd::drag_law_names(cgd::DragKind::Filtered), "\"radl2014\", \"model\"");
+}
+
+TEST(DragTable, EveryLawIsInTheDocs) {
+  const std::string models = read_doc("docs/models.md"), keys = read_doc("docs/scene-keys.md");
+  for (const cgd::DragLawInfo& row : cgd::kDragLaws) {
+    const std::string name = row.name;
+    EXPECT_NE(models.find("`" + name + "`"), std::string::npos)
+        << "docs/models.md does not name the drag law `" << name << "` (its row in \"Drag laws\")";
+    EXPECT_NE(keys.find("`\"" + name + "\"`"), std::string::npos)
+        << "docs/scene-keys.md does not offer \"" << name << "\" as a value of fluid.drag";
   }
 }
 
