@@ -483,15 +483,9 @@ std::string file_list(const std::vector<FilteredFile>& files) {
   return s;
 }
 
-}  // namespace
-
-FitResult fit_filtered_drag(const std::vector<FilteredFile>& files, const FitOptions& o, std::ostream* log) {
-  const auto start = std::chrono::steady_clock::now();
-  if (files.empty()) throw InputError("cgd-fit: no filtered files given");
-  FitResult R;
-  const FilteredFile& first = files.front();
-
-  // enough widths?
+/// The distinct widths (F = L_char/Delta) of the files at least o.min_width_over_cell cells wide, whole-box
+/// series aside; InputError when there are fewer than o.min_widths of them (2 parameters per bin + 1).
+std::set<double> usable_widths(const std::vector<FilteredFile>& files, const FitOptions& o) {
   std::set<double> widths;
   int narrow = 0;
   for (const FilteredFile& f : files)
@@ -510,42 +504,14 @@ FitResult fit_filtered_drag(const std::vector<FilteredFile>& files, const FitOpt
                      " narrower not used), at least " + std::to_string(o.min_widths) +
                      " needed (2 parameters per bin + 1 degree of freedom)");
 
-  // ---- step 0: the width exponent n (given, or the minimum of the pooled chi^2 of the bin fits)
-  const double n = o.fit_width_exponent ? fit_width_exponent(files, o, R) : o.width_exponent;
-  R.width_exponent = n;
-  if (log && o.fit_width_exponent)
-    *log << "cgd-fit: width exponent n = " << n << " [" << R.width_exponent_low << ", " << R.width_exponent_high
-         << "] (profile of the pooled chi^2 over " << R.exponent_grid.size() << " values)\n";
+  return widths;
+}
 
-  // ---- steps 1 and 2 on the data as filtered
-  const std::vector<Series> series = observe(files, nullptr, o.min_width_over_cell, n);
-  R.bins = fit_bins(files, series, o);
-  int used = 0;
-  double phi_max = o.phi_crit;
-  for (const BinEstimate& b : R.bins)
-    if (b.used) ++used, phi_max = std::max(phi_max, b.phi);
-  if (used < 4)
-    throw InputError(file_list(files) + ": too few phi bins to fit: " + std::to_string(used) + " of " +
-                     std::to_string(R.bins.size()) + " bins have >= " + std::to_string(o.min_count) +
-                     " samples at >= " + std::to_string(o.min_widths) +
-                     " widths above phi_crit = " + std::to_string(o.phi_crit) +
-                     "; at least 4 needed (lower --min-count or filter longer runs)");
-  R.breakpoints = o.breakpoints > 0 ? o.breakpoints : std::clamp(used / 2 + 2, 5, 15);
-  const Curves main = fit_curves(R.bins, o.phi_crit, phi_max, R.breakpoints, -1, -1);
-  R.lambda_h = main.h.lambda;
-  R.lambda_log_a = main.log_a.lambda;
-  R.edf_h = main.h.edf;
-  R.edf_log_a = main.log_a.edf;
-  {
-    double chi2 = 0;
-    int dof = 0;
-    for (const BinEstimate& b : R.bins)
-      if (b.used) chi2 += b.chi2, dof += b.widths - 2;
-    R.chi2_per_dof = dof > 0 ? chi2 / dof : kNaN;
-  }
-
-  DragModel& M = R.model;
-  const Physics& p = first.physics;
+/// The model file's header of a fit: the files' physical system (the first file's; fit_filtered_drag's
+/// callers checked that the files agree), the options' phi_crit and h_max, the exponent n, the fitted
+/// curves, the range of log a the bins identified and the paper's c_corr.
+void fill_model(DragModel& M, const std::vector<BinEstimate>& bins, const Physics& p, const FitOptions& o, double n,
+                const Curves& main) {
   M.base_law = microscopic_drag_law(p.micro_drag).value();  // checked when the file was read
   M.u_t_convention = kUtConvention;
   M.u_t_m_s = p.u_t_m_s;
@@ -564,13 +530,17 @@ FitResult fit_filtered_drag(const std::vector<FilteredFile>& files, const FitOpt
   // the log a curve stays within the range the bins identified (docs/fit.md "Low phi")
   M.log_a_min = HUGE_VAL;
   M.log_a_max = -HUGE_VAL;
-  for (const BinEstimate& b : R.bins)
+  for (const BinEstimate& b : bins)
     if (b.used) M.log_a_min = std::min(M.log_a_min, b.log_a), M.log_a_max = std::max(M.log_a_max, b.log_a);
   M.c_corr_a = Radl2014Curves::kCcorrA;
   M.c_corr_k = Radl2014Curves::kCcorrK;
   M.c_corr_source = "paper";
 
-  // band grid
+}
+
+/// The bands' grid (121 phi from 0 to phi_max, the data's widths) and the fitted h, a and H on it.
+void fill_band(FitResult& R, const std::set<double>& widths, const FitOptions& o, double n, double phi_max) {
+  const DragModel& M = R.model;
   const int n_phi = 121;
   for (int i = 0; i < n_phi; ++i) R.band_phi.push_back(phi_max * i / (n_phi - 1.0));
   R.band_F.assign(widths.begin(), widths.end());
@@ -588,7 +558,16 @@ FitResult fit_filtered_drag(const std::vector<FilteredFile>& files, const FitOpt
   for (double Fn : band_Fn)
     for (std::size_t i = 0; i < R.band_phi.size(); ++i) R.H.push_back(R.h[i] / (1.0 + R.a[i] * Fn));
 
-  // ---- step 3: bootstrap
+}
+
+/// Step 3: the bootstrap of the curves (snapshot blocks, or normal intervals for files without per-snapshot
+/// sums; o.bootstrap replicates), the percentile bands widened by the main fit's smoothing-bias allowance,
+/// and the bins' bootstrap standard errors. Without replicates the bands are NaN.
+void bootstrap_bands(const std::vector<FilteredFile>& files, const FitOptions& o, double n, double phi_max,
+                     const std::vector<Series>& series, const Curves& main, FitResult& R) {
+  const DragModel& M = R.model;
+  std::vector<double> band_Fn;  // F^n of the data's widths
+  for (double F : R.band_F) band_Fn.push_back(std::pow(F, n));
   const std::size_t nphi = R.band_phi.size(), nF = R.band_F.size();
   R.h_low = R.h_high = R.a_low = R.a_high = std::vector<double>(nphi, kNaN);
   R.H_low = R.H_high = std::vector<double>(nphi * nF, kNaN);
@@ -706,6 +685,10 @@ FitResult fit_filtered_drag(const std::vector<FilteredFile>& files, const FitOpt
     }
   }
 
+}
+
+/// The data as fitted (per series: F, fitted or not, H and its sigma per bin) for the report.
+void record_data(const std::vector<FilteredFile>& files, const std::vector<Series>& series, FitResult& R) {
   for (const Series& s : series) {
     R.data_series.push_back(files[s.file].path + ":" + files[s.file].widths[s.width].group);
     R.data_F.push_back(s.F);
@@ -715,7 +698,13 @@ FitResult fit_filtered_drag(const std::vector<FilteredFile>& files, const FitOpt
   }
   for (const BinEstimate& b : R.bins) R.data_phi.push_back(b.phi);
 
-  // ---- step 4: residuals per width (per-bin fits and the smoothed model), whole box as a check
+}
+
+/// Step 4: residuals per width against the per-bin fits (fitted widths) or the smoothed model (the
+/// others, whole box included, as a check).
+void width_residuals(const std::vector<FilteredFile>& files, const FitOptions& o, const std::vector<Series>& series,
+                     FitResult& R) {
+  const SplineCurves curves{&R.model};
   for (const Series& s : series) {
     WidthResiduals wr;
     wr.file = files[s.file].path;
@@ -748,7 +737,14 @@ FitResult fit_filtered_drag(const std::vector<FilteredFile>& files, const FitOpt
     R.residuals.push_back(wr);
   }
 
-  // ---- step 4: leave-one-run-out cross-validation
+}
+
+/// Step 4: leave-one-run-out cross-validation (with o.cross_validate and at least two runs): each run's
+/// points against curves fitted without it, and the in-sample rms of the same points.
+void cross_validate(const std::vector<FilteredFile>& files, const FitOptions& o, double n, double phi_max,
+                    const std::vector<Series>& series, FitResult& R) {
+  const DragModel& M = R.model;
+  const SplineCurves curves{&M};
   std::vector<std::pair<std::size_t, std::int64_t>> runs;
   for (std::size_t f = 0; f < files.size(); ++f) {
     if (files[f].has_per_snapshot) {
@@ -824,6 +820,58 @@ FitResult fit_filtered_drag(const std::vector<FilteredFile>& files, const FitOpt
     }
     if (total > 0) R.cv_rms = std::sqrt(sq / total), R.cv_in_sample_rms = std::sqrt(sq_in / total);
   }
+}
+
+}  // namespace
+
+/// Steps (docs/fit.md): the usable widths, step 0 the width exponent, steps 1-2 the per-bin fits and the
+/// P-splines, the model's header and the band grid, step 3 the bootstrap, step 4 residuals and
+/// cross-validation; each step is a function above.
+FitResult fit_filtered_drag(const std::vector<FilteredFile>& files, const FitOptions& o, std::ostream* log) {
+  const auto start = std::chrono::steady_clock::now();
+  if (files.empty()) throw InputError("cgd-fit: no filtered files given");
+  FitResult R;
+  const std::set<double> widths = usable_widths(files, o);
+  // ---- step 0: the width exponent n (given, or the minimum of the pooled chi^2 of the bin fits)
+  const double n = o.fit_width_exponent ? fit_width_exponent(files, o, R) : o.width_exponent;
+  R.width_exponent = n;
+  if (log && o.fit_width_exponent)
+    *log << "cgd-fit: width exponent n = " << n << " [" << R.width_exponent_low << ", " << R.width_exponent_high
+         << "] (profile of the pooled chi^2 over " << R.exponent_grid.size() << " values)\n";
+
+  // ---- steps 1 and 2 on the data as filtered
+  const std::vector<Series> series = observe(files, nullptr, o.min_width_over_cell, n);
+  R.bins = fit_bins(files, series, o);
+  int used = 0;
+  double phi_max = o.phi_crit;
+  for (const BinEstimate& b : R.bins)
+    if (b.used) ++used, phi_max = std::max(phi_max, b.phi);
+  if (used < 4)
+    throw InputError(file_list(files) + ": too few phi bins to fit: " + std::to_string(used) + " of " +
+                     std::to_string(R.bins.size()) + " bins have >= " + std::to_string(o.min_count) +
+                     " samples at >= " + std::to_string(o.min_widths) +
+                     " widths above phi_crit = " + std::to_string(o.phi_crit) +
+                     "; at least 4 needed (lower --min-count or filter longer runs)");
+  R.breakpoints = o.breakpoints > 0 ? o.breakpoints : std::clamp(used / 2 + 2, 5, 15);
+  const Curves main = fit_curves(R.bins, o.phi_crit, phi_max, R.breakpoints, -1, -1);
+  R.lambda_h = main.h.lambda;
+  R.lambda_log_a = main.log_a.lambda;
+  R.edf_h = main.h.edf;
+  R.edf_log_a = main.log_a.edf;
+  {
+    double chi2 = 0;
+    int dof = 0;
+    for (const BinEstimate& b : R.bins)
+      if (b.used) chi2 += b.chi2, dof += b.widths - 2;
+    R.chi2_per_dof = dof > 0 ? chi2 / dof : kNaN;
+  }
+
+  fill_model(R.model, R.bins, files.front().physics, o, n, main);
+  fill_band(R, widths, o, n, phi_max);
+  bootstrap_bands(files, o, n, phi_max, series, main, R);
+  record_data(files, series, R);
+  width_residuals(files, o, series, R);
+  cross_validate(files, o, n, phi_max, series, R);
   R.wall_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   if (log) *log << "cgd-fit: fitted in " << R.wall_seconds << " s\n";
   return R;
