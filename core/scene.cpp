@@ -15,7 +15,6 @@
 // Every error is an InputError: "<file>: <section.key> = <value given>: <what is allowed>".
 #include "core/scene.hpp"
 
-#include <toml++/toml.h>
 #include <algorithm>
 #include <cerrno>
 #include <charconv>
@@ -30,6 +29,7 @@
 #include "core/checksum.hpp"
 #include "core/error.hpp"
 #include "core/scales.hpp"
+#include "core/scene_toml.hpp"
 
 namespace cgd {
 
@@ -57,625 +57,7 @@ const char* to_string(Coupling c) {
 
 namespace {
 
-// ---- schema --------------------------------------------------------------------------------------
-
-enum class Kind { Number, Integer, Boolean, String, Vec3Number, Vec3Integer };
-
-struct KeySpec {
-  const char* name;
-  Kind kind;
-  const char* meaning;  // unit and meaning, quoted in messages
-};
-
-struct SectionSpec {
-  const char* name;
-  std::vector<KeySpec> keys;
-};
-
-const std::vector<SectionSpec>& schema() {
-  static const std::vector<SectionSpec> sections = {
-      {"domain",
-       {{"size_dp", Kind::Vec3Number, "box edges (x, y = vertical, z) in primary diameters"},
-        {"size", Kind::Vec3Number, "box edges (x, y = vertical, z) in m"},
-        {"gravity", Kind::Vec3Number, "gravitational acceleration in m/s^2"}}},
-      {"particles",
-       {{"diameter", Kind::Number, "m, primary particle diameter d_p"},
-        {"density", Kind::Number, "kg/m^3, particle density"},
-        {"solids_fraction", Kind::Number, "domain-averaged solids volume fraction"},
-        {"parcel_size", Kind::Number, "alpha = d_parcel / d_prim"},
-        {"velocity_rms", Kind::Number, "m/s, rms speed of the random initial velocities"},
-        {"seed", Kind::Integer, "seed of the random placement and velocities"}}},
-      {"contact",
-       {{"model", Kind::String, "contact law"},
-        {"gamma_star", Kind::Number, "dimensionless stiffness (docs/models.md, \"Contact law\")"},
-        {"stiffness", Kind::Number, "N/m, normal spring stiffness of two primaries"},
-        {"t_star", Kind::Number, "dt_DEM / t_c"},
-        {"restitution", Kind::Number, "normal coefficient of restitution"},
-        {"friction", Kind::Number, "Coulomb friction coefficient"},
-        {"kn_over_kt", Kind::Number, "normal over tangential stiffness"},
-        {"gamman_over_gammat", Kind::Number, "normal over tangential damping"},
-        {"skin_over_dp", Kind::Number, "Verlet neighbour skin in primary diameters"}}},
-      {"fluid",
-       {{"density", Kind::Number, "kg/m^3, fluid density"},
-        {"viscosity", Kind::Number, "Pa s, dynamic viscosity of the fluid"},
-        {"cells", Kind::Vec3Integer, "fluid cells along x, y, z"},
-        {"dx_over_dp", Kind::Number, "fluid cell size in primary diameters"},
-        {"courant", Kind::Number, "Courant number of the fluid step"},
-        {"coupling", Kind::String, "fluid-particle coupling"},
-        {"drag", Kind::String, "microscopic drag law"},
-        {"drag_model", Kind::String, "path of the drag model file (cgd-fit) used by drag = \"model\""},
-        {"drag_model_checksum", Kind::String, "FNV-1a checksum of fluid.drag_model (recorded by cgd)"},
-        {"pressure_gradient_force", Kind::Boolean, "apply -V_p grad p to the particles"},
-        {"parcel_correction", Kind::Boolean,
-         "apply c_corr(alpha) of a filtered law (false: the parcel fit's runs)"}}},
-      {"run",
-       {{"end_time", Kind::Number, "s, simulated time"},
-        {"end_time_tref", Kind::Number, "simulated time in units of t_ref = u_t/g"},
-        {"dump_interval", Kind::Number, "s between snapshots"},
-        {"dump_interval_tref", Kind::Number, "snapshot interval in units of t_ref = u_t/g"},
-        {"series_interval", Kind::Number, "s between time-series rows"},
-        {"series_interval_tref", Kind::Number, "time-series interval in units of t_ref = u_t/g"},
-        {"checkpoint_wall_s", Kind::Number, "wall-clock seconds between checkpoints"},
-        {"sampling_start", Kind::Number, "s, start of the window of time averages (after the transient)"},
-        {"sampling_start_tref", Kind::Number,
-         "start of the window of time averages in units of t_ref = u_t/g"},
-        {"dt", Kind::Number, "s, explicit DEM time step"}}},
-      {"numerics",
-       {{"void_fraction_floor", Kind::Number, "smallest void fraction the fluid sees (conservative floor)"},
-        {"overlap_limit", Kind::Number, "largest relative overlap (of the diameter) before a run error"},
-        {"overlap_warning_fraction", Kind::Number, "fraction of overlap_limit at which the run warns once"},
-        {"viscous_safety", Kind::Number, "fluid step over AB2's explicit-viscosity limit"},
-        {"drag_safety", Kind::Number, "largest fluid step x beta_max / rho_p (explicit particle drag)"},
-        {"sort_interval_steps", Kind::Integer, "DEM steps between reorderings of the particles by cell"}}},
-  };
-  return sections;
-}
-
-const SectionSpec* find_section(std::string_view name) {
-  for (const auto& s : schema())
-    if (name == s.name) return &s;
-  return nullptr;
-}
-
-const KeySpec* find_key(const SectionSpec& section, std::string_view name) {
-  for (const auto& k : section.keys)
-    if (name == k.name) return &k;
-  return nullptr;
-}
-
-const KeySpec& key_spec(std::string_view section, std::string_view key) {
-  const SectionSpec* s = find_section(section);
-  const KeySpec* k = s ? find_key(*s, key) : nullptr;
-  if (!k) throw std::logic_error("scene schema has no key " + std::string(section) + "." + std::string(key));
-  return *k;
-}
-
-// ---- alternatives --------------------------------------------------------------------------------
-
-/// Two keys that give one quantity in two ways (e.g. a time in s or in units of t_ref). A scene file
-/// gives at most one of them; a --set of either replaces the other (any key can be overridden from the
-/// command line, whichever of the pair the file uses).
-struct Alternative {
-  const char* section;
-  const char* first;  // the key named first in messages
-  const char* second;
-  const char* first_unit;  // how each gives the quantity, quoted in messages
-  const char* second_unit;
-};
-
-const std::vector<Alternative>& alternatives() {
-  static const std::vector<Alternative> pairs = {
-      {"domain", "size_dp", "size", "primary diameters", "m"},
-      {"contact", "gamma_star", "stiffness", "dimensionless", "N/m"},
-      {"fluid", "cells", "dx_over_dp", "cell counts", "cell size in primary diameters"},
-      {"run", "end_time", "end_time_tref", "s", "units of t_ref = u_t/g"},
-      {"run", "dump_interval", "dump_interval_tref", "s", "units of t_ref = u_t/g"},
-      {"run", "series_interval", "series_interval_tref", "s", "units of t_ref = u_t/g"},
-      {"run", "sampling_start", "sampling_start_tref", "s", "units of t_ref = u_t/g"},
-  };
-  return pairs;
-}
-
-/// The other key of the pair `section.key` belongs to, if it belongs to one.
-const char* alternative_of(std::string_view section, std::string_view key) {
-  for (const auto& a : alternatives())
-    if (section == a.section) {
-      if (key == a.first) return a.second;
-      if (key == a.second) return a.first;
-    }
-  return nullptr;
-}
-
-// ---- did-you-mean --------------------------------------------------------------------------------
-
-std::size_t edit_distance(std::string_view a, std::string_view b) {
-  std::vector<std::size_t> row(b.size() + 1);
-  for (std::size_t j = 0; j <= b.size(); ++j) row[j] = j;
-  for (std::size_t i = 1; i <= a.size(); ++i) {
-    std::size_t diagonal = row[0];
-    row[0] = i;
-    for (std::size_t j = 1; j <= b.size(); ++j) {
-      const std::size_t above = row[j];
-      const std::size_t substitution = diagonal + (a[i - 1] == b[j - 1] ? 0 : 1);
-      row[j] = std::min({above + 1, row[j - 1] + 1, substitution});
-      diagonal = above;
-    }
-  }
-  return row[b.size()];
-}
-
-/// The candidate closest to `given`, if it is close enough to be a plausible typo.
-std::optional<std::string> closest(std::string_view given, const std::vector<std::string>& candidates) {
-  std::optional<std::string> best;
-  std::size_t best_distance = std::max<std::size_t>(2, given.size() / 3) + 1;
-  for (const auto& c : candidates) {
-    const std::size_t d = edit_distance(given, c);
-    if (d < best_distance) {
-      best_distance = d;
-      best = c;
-    }
-  }
-  return best;
-}
-
-std::string join(const std::vector<std::string>& items, const std::string& separator) {
-  std::string out;
-  for (std::size_t i = 0; i < items.size(); ++i) out += (i ? separator : "") + items[i];
-  return out;
-}
-
-std::vector<std::string> section_names() {
-  std::vector<std::string> names;
-  for (const auto& s : schema()) names.emplace_back(s.name);
-  return names;
-}
-
-std::vector<std::string> key_names(const SectionSpec& section) {
-  std::vector<std::string> names;
-  for (const auto& k : section.keys) names.emplace_back(k.name);
-  return names;
-}
-
-std::string section_key_list(const SectionSpec& section) {
-  return "keys of [" + std::string(section.name) + "]: " + join(key_names(section), ", ");
-}
-
-std::string unknown_section_message(std::string_view given) {
-  std::string msg = "unknown section [" + std::string(given) + "]";
-  if (auto near = closest(given, section_names())) msg += "; did you mean [" + *near + "]?";
-  return msg + " (sections: " + join(section_names(), ", ") + ")";
-}
-
-/// "unknown key section.key; did you mean ...?" A key that exists in another section is taken as
-/// misplaced before a near name in its own section is offered as a typo. With `with_key_list`, the
-/// keys of the section follow (a message listing several problems lists them once, at its end).
-std::string unknown_key_message(const SectionSpec& section, std::string_view given,
-                                bool with_key_list = true) {
-  std::string msg = "unknown key " + std::string(section.name) + "." + std::string(given);
-  const SectionSpec* home = nullptr;
-  for (const auto& other : schema())
-    if (&other != &section && find_key(other, given)) home = &other;
-  if (home) {
-    msg += "; did you mean " + std::string(home->name) + "." + std::string(given) + "?";
-  } else if (auto near = closest(given, key_names(section))) {
-    msg += "; did you mean " + std::string(section.name) + "." + *near + "?";
-  }
-  if (with_key_list) msg += " (" + section_key_list(section) + ")";
-  return msg;
-}
-
-// ---- printing values (messages and the effective scene) -------------------------------------------
-
-/// Shortest text that reads back as the same double, always recognisable as a TOML float.
-std::string format_float(double v) {
-  if (std::isnan(v)) return "nan";
-  if (std::isinf(v)) return v > 0 ? "inf" : "-inf";
-  char buffer[64];
-  // shortest round trip, in fixed or scientific notation whichever is shorter (like %g)
-  const auto result = std::to_chars(buffer, buffer + sizeof buffer, v, std::chars_format::general);
-  std::string text(buffer, result.ptr);
-  if (text.find_first_of(".eE") == std::string::npos) text += ".0";
-  return text;
-}
-
-std::string quote(std::string_view s) {
-  std::string out = "\"";
-  for (const char c : s) {
-    switch (c) {
-      case '"':
-        out += "\\\"";
-        break;
-      case '\\':
-        out += "\\\\";
-        break;
-      case '\n':
-        out += "\\n";
-        break;
-      case '\t':
-        out += "\\t";
-        break;
-      case '\r':
-        out += "\\r";
-        break;
-      default:
-        if (static_cast<unsigned char>(c) < 0x20) {
-          char hex[8];
-          std::snprintf(hex, sizeof hex, "\\u%04x", static_cast<unsigned>(c));
-          out += hex;
-        } else {
-          out += c;
-        }
-    }
-  }
-  return out + "\"";
-}
-
-std::string format_node(const toml::node& node) {
-  if (const auto* v = node.as_floating_point()) return format_float(v->get());
-  if (const auto* v = node.as_integer()) return std::to_string(v->get());
-  if (const auto* v = node.as_boolean()) return v->get() ? "true" : "false";
-  if (const auto* v = node.as_string()) return quote(v->get());
-  if (const auto* a = node.as_array()) {
-    std::vector<std::string> items;
-    for (const auto& element : *a) items.push_back(format_node(element));
-    return "[" + join(items, ", ") + "]";
-  }
-  if (const auto* t = node.as_table()) {
-    std::vector<std::string> items;
-    for (const auto& [key, value] : *t) items.push_back(std::string(key.str()) + " = " + format_node(value));
-    return "{" + join(items, ", ") + "}";
-  }
-  std::ostringstream out;  // dates and times: toml++'s own form
-  out << toml::node_view<const toml::node>(node);
-  return out.str();
-}
-
-/// The effective scene, sections and keys in schema order (the root holds nothing else once
-/// the structure has been checked).
-std::string emit_scene(const toml::table& root) {
-  std::string out;
-  for (const auto& section : schema()) {
-    const toml::table* table = root[section.name].as_table();
-    if (!table) continue;
-    if (!out.empty()) out += "\n";
-    out += "[" + std::string(section.name) + "]\n";
-    for (const auto& key : section.keys)
-      if (const toml::node* node = table->get(key.name))
-        out += std::string(key.name) + " = " + format_node(*node) + "\n";
-  }
-  return out;
-}
-
-// ---- reading -------------------------------------------------------------------------------------
-
-std::string kind_text(Kind kind) {
-  switch (kind) {
-    case Kind::Number:
-      return "a number";
-    case Kind::Integer:
-      return "an integer";
-    case Kind::Boolean:
-      return "true or false";
-    case Kind::String:
-      return "a string";
-    case Kind::Vec3Number:
-      return "an array of 3 numbers [x, y, z]";
-    case Kind::Vec3Integer:
-      return "an array of 3 integers [x, y, z]";
-  }
-  return "?";
-}
-
-bool is_finite_number(const toml::node& node) {
-  if (node.is_integer()) return true;
-  if (const auto* v = node.as_floating_point()) return std::isfinite(v->get());
-  return false;
-}
-
-double as_double(const toml::node& node) {
-  if (const auto* v = node.as_integer()) return static_cast<double>(v->get());
-  return node.as_floating_point()->get();
-}
-
-bool has_kind(const toml::node& node, Kind kind) {
-  switch (kind) {
-    case Kind::Number:
-      return is_finite_number(node);
-    case Kind::Integer:
-      return node.is_integer();
-    case Kind::Boolean:
-      return node.is_boolean();
-    case Kind::String:
-      return node.is_string();
-    case Kind::Vec3Number:
-    case Kind::Vec3Integer: {
-      const auto* a = node.as_array();
-      if (!a || a->size() != 3) return false;
-      for (const auto& element : *a)
-        if (kind == Kind::Vec3Integer ? !element.is_integer() : !is_finite_number(element)) return false;
-      return true;
-    }
-  }
-  return false;
-}
-
-/// What a value of the wrong type breaks: the kind the key takes, the offending array element, its meaning.
-std::string type_rule(const KeySpec& spec, const toml::node& value) {
-  std::string rule = "must be " + kind_text(spec.kind);
-  if (spec.kind == Kind::Number && value.is_floating_point()) rule = "must be a finite number";
-  if (const auto* a = value.as_array(); a && a->size() != 3) {
-    rule += ", got " + std::to_string(a->size()) + " element" + (a->size() == 1 ? "" : "s");
-  } else if (a) {
-    for (std::size_t i = 0; i < a->size(); ++i)
-      if (!has_kind(*a->get(i), spec.kind == Kind::Vec3Integer ? Kind::Integer : Kind::Number)) {
-        rule += "; element " + std::to_string(i + 1) + " (" + format_node(*a->get(i)) + ") is not " +
-                (spec.kind == Kind::Vec3Integer ? "an integer" : "a finite number");
-        break;
-      }
-  }
-  return rule + " (" + spec.meaning + ")";
-}
-
-/// Reads validated values out of the (overridden) root table and words every error.
-class SceneReader {
- public:
-  SceneReader(std::string origin, const toml::table& root, std::set<std::string> overridden)
-      : origin_(std::move(origin)), root_(root), overridden_(std::move(overridden)) {}
-
-  [[noreturn]] void fail(const std::string& message) const { throw InputError(origin_ + ": " + message); }
-
-  /// "file: section.key = value (from --set): rule"
-  [[noreturn]] void fail_value(std::string_view section, std::string_view key,
-                               const std::string& rule) const {
-    fail(value_message(section, key, rule));
-  }
-
-  /// "section.key = value (from --set): rule"
-  std::string value_message(std::string_view section, std::string_view key, const std::string& rule) const {
-    const std::string name = std::string(section) + "." + std::string(key);
-    const toml::node* n = node(section, key);
-    std::string message = name + " = " + (n ? format_node(*n) : std::string("?"));
-    if (overridden_.count(name)) message += " (from --set)";
-    return message + ": " + rule;
-  }
-
-  /// Both keys of an alternative pair in the scene: which to keep, and how --set chooses one.
-  std::string conflict_message(const Alternative& pair) const {
-    const std::string section = pair.section;
-    const std::string first = section + "." + pair.first, second = section + "." + pair.second;
-    return first + " = " + format_node(*node(section, pair.first)) + " and " + second + " = " +
-           format_node(*node(section, pair.second)) + ": give either " + first + " (" + pair.first_unit +
-           ") or " + second + " (" + pair.second_unit +
-           "), not both: delete one of them from the scene (on the command line, --set " + first +
-           "=VALUE replaces " + second + ", and the other way round)";
-  }
-
-  const toml::node* node(std::string_view section, std::string_view key) const {
-    const toml::table* table = root_[section].as_table();
-    return table ? table->get(key) : nullptr;
-  }
-  bool has(std::string_view section, std::string_view key) const { return node(section, key) != nullptr; }
-  bool has_section(std::string_view section) const { return root_[section].as_table() != nullptr; }
-
-  /// Unknown, misplaced and mistyped keys (wrong types, array lengths) and alternatives given twice
-  /// (alternatives()), all of them in one InputError: a scene with three misplaced keys is fixed in one go.
-  void check_structure() const {
-    std::vector<std::string> problems;
-    std::vector<const SectionSpec*> sections_with_unknown_keys;  // their key lists close the message
-    for (const auto& [section_key, section_node] : root_) {
-      const std::string_view section_name = section_key.str();
-      const SectionSpec* section = find_section(section_name);
-      if (!section_node.is_table()) {
-        if (section) {
-          problems.push_back(std::string(section_name) + " = " + format_node(section_node) +
-                             ": must be a section [" + std::string(section_name) + "]");
-          continue;
-        }
-        // a bare key at the top level: perhaps a key that belongs in a section
-        std::string message = "unknown top-level key " + std::string(section_name);
-        for (const auto& s : schema())
-          if (find_key(s, section_name)) {
-            message += "; did you mean " + std::string(s.name) + "." + std::string(section_name) + " (in [" +
-                       s.name + "])?";
-            break;
-          }
-        problems.push_back(message + " (every key belongs in a section: " + join(section_names(), ", ") +
-                           ")");
-        continue;
-      }
-      if (!section) {
-        problems.push_back(unknown_section_message(section_name));
-        continue;
-      }
-      for (const auto& [key, value] : *section_node.as_table()) {
-        const KeySpec* spec = find_key(*section, key.str());
-        if (!spec) {
-          problems.push_back(unknown_key_message(*section, key.str(), false));
-          if (std::find(sections_with_unknown_keys.begin(), sections_with_unknown_keys.end(), section) ==
-              sections_with_unknown_keys.end())
-            sections_with_unknown_keys.push_back(section);
-          continue;
-        }
-        if (!has_kind(value, spec->kind))
-          problems.push_back(value_message(section->name, key.str(), type_rule(*spec, value)));
-      }
-      for (const auto& pair : alternatives())
-        if (section_name == pair.section && has(pair.section, pair.first) && has(pair.section, pair.second))
-          problems.push_back(conflict_message(pair));
-    }
-    if (problems.empty()) return;
-    if (problems.size() == 1) {
-      std::string message = problems.front();
-      if (!sections_with_unknown_keys.empty())
-        message += " (" + section_key_list(*sections_with_unknown_keys.front()) + ")";
-      fail(message);
-    }
-    std::string message = std::to_string(problems.size()) + " problems:";
-    for (const auto& problem : problems) message += "\n  " + problem;
-    for (const SectionSpec* section : sections_with_unknown_keys)
-      message += "\n  (" + section_key_list(*section) + ")";
-    fail(message);
-  }
-
-  std::optional<double> number(std::string_view section, std::string_view key) const {
-    const toml::node* n = node(section, key);
-    return n ? std::optional<double>(as_double(*n)) : std::nullopt;
-  }
-
-  double required(std::string_view section, std::string_view key) const {
-    if (auto v = number(section, key)) return *v;
-    fail_missing(section, key, "");
-  }
-
-  [[noreturn]] void fail_missing(std::string_view section, std::string_view key,
-                                 const std::string& why) const {
-    const KeySpec& spec = key_spec(section, key);
-    fail(std::string(section) + "." + std::string(key) + " is missing: required" + why + " (" + spec.meaning +
-         ")");
-  }
-
-  std::optional<Vec3> vec3(std::string_view section, std::string_view key) const {
-    const toml::node* n = node(section, key);
-    if (!n) return std::nullopt;
-    const auto& a = *n->as_array();
-    return Vec3{as_double(*a.get(0)), as_double(*a.get(1)), as_double(*a.get(2))};
-  }
-
-  std::optional<std::array<std::int64_t, 3>> ivec3(std::string_view section, std::string_view key) const {
-    const toml::node* n = node(section, key);
-    if (!n) return std::nullopt;
-    const auto& a = *n->as_array();
-    return std::array<std::int64_t, 3>{a.get(0)->as_integer()->get(), a.get(1)->as_integer()->get(),
-                                       a.get(2)->as_integer()->get()};
-  }
-
-  std::optional<std::string> string(std::string_view section, std::string_view key) const {
-    const toml::node* n = node(section, key);
-    return n ? std::optional<std::string>(n->as_string()->get()) : std::nullopt;
-  }
-
-  std::optional<bool> boolean(std::string_view section, std::string_view key) const {
-    const toml::node* n = node(section, key);
-    return n ? std::optional<bool>(n->as_boolean()->get()) : std::nullopt;
-  }
-
-  std::optional<std::int64_t> integer(std::string_view section, std::string_view key) const {
-    const toml::node* n = node(section, key);
-    return n ? std::optional<std::int64_t>(n->as_integer()->get()) : std::nullopt;
-  }
-
-  // Range-checked numbers: `rule` is the allowed range as shown to the user.
-  double positive(std::string_view section, std::string_view key, double value) const {
-    if (!(value > 0.0))
-      fail_value(section, key, "must be > 0 (" + std::string(key_spec(section, key).meaning) + ")");
-    return value;
-  }
-  double non_negative(std::string_view section, std::string_view key, double value) const {
-    if (!(value >= 0.0))
-      fail_value(section, key, "must be >= 0 (" + std::string(key_spec(section, key).meaning) + ")");
-    return value;
-  }
-  /// lower < value <= upper (or < upper when !upper_inclusive)
-  double in_range(std::string_view section, std::string_view key, double value, double lower, double upper,
-                  bool upper_inclusive, const std::string& why = "") const {
-    const bool ok = value > lower && (upper_inclusive ? value <= upper : value < upper);
-    if (!ok)
-      fail_value(section, key,
-                 "must be in (" + format_short(lower) + ", " + format_short(upper) +
-                     (upper_inclusive ? "]" : ")") + " (" + key_spec(section, key).meaning + why + ")");
-    return value;
-  }
-
-  template <typename Enum>
-  Enum choice(std::string_view section, std::string_view key,
-              const std::vector<std::pair<std::string, Enum>>& choices, Enum fallback) const {
-    const auto given = string(section, key);
-    if (!given) return fallback;
-    std::vector<std::string> names;
-    for (const auto& [name, value] : choices) {
-      if (*given == name) return value;
-      names.push_back(name);
-    }
-    std::vector<std::string> quoted;
-    for (const auto& n : names) quoted.push_back(quote(n));
-    std::string rule = "must be one of " + join(quoted, ", ");
-    if (auto near = closest(*given, names)) rule += "; did you mean " + quote(*near) + "?";
-    fail_value(section, key, rule + " (" + key_spec(section, key).meaning + ")");
-  }
-
-  static std::string format_short(double v) {
-    std::string text = format_float(v);
-    if (text.size() > 2 && text.ends_with(".0")) text.resize(text.size() - 2);
-    return text;
-  }
-
- private:
-  std::string origin_;
-  const toml::table& root_;
-  std::set<std::string> overridden_;
-};
-
-// ---- overrides -----------------------------------------------------------------------------------
-
-std::string trim(std::string_view s) {
-  const auto first = s.find_first_not_of(" \t");
-  if (first == std::string_view::npos) return "";
-  const auto last = s.find_last_not_of(" \t");
-  return std::string(s.substr(first, last - first + 1));
-}
-
-/// Applies one "section.key=value"; returns "section.key".
-std::string apply_override(toml::table& root, const std::string& text, const std::string& origin) {
-  const std::string shown = "--set " + text;
-  const auto fail = [&](const std::string& why) -> void {
-    throw InputError(origin + ": " + shown + ": " + why);
-  };
-  const auto eq = text.find('=');
-  if (eq == std::string::npos) fail("expected SECTION.KEY=VALUE, e.g. --set particles.solids_fraction=0.2");
-  const std::string name = trim(std::string_view(text).substr(0, eq));
-  const std::string value_text = trim(std::string_view(text).substr(eq + 1));
-  const auto dot = name.find('.');
-  if (dot == std::string::npos || dot == 0 || dot + 1 == name.size())
-    fail("the key must be SECTION.KEY (sections: " + join(section_names(), ", ") +
-         "), e.g. --set particles.solids_fraction=0.2");
-  const std::string section_name = name.substr(0, dot);
-  const std::string key_name = name.substr(dot + 1);
-  const SectionSpec* section = find_section(section_name);
-  if (!section) fail(unknown_section_message(section_name));
-  if (!find_key(*section, key_name)) fail(unknown_key_message(*section, key_name));
-  if (value_text.empty()) fail("no value after '='");
-  if (value_text.find_first_of("\n\r") != std::string::npos) fail("the value must be on one line");
-
-  // The value is read as TOML (numbers, booleans, arrays, quoted strings); text that is not TOML
-  // is taken as a bare string (--set fluid.drag=wen-yu), unless it looks like an array, an inline
-  // table or a quoted string, where the syntax error is what the user needs to see.
-  toml::table parsed;
-  bool is_toml = false;
-  try {
-    parsed = toml::parse("value = " + value_text, std::string_view("--set"));
-    is_toml = parsed.size() == 1 && parsed.get("value");
-  } catch (const toml::parse_error& e) {
-    if (std::string_view("[{\"'").find(value_text.front()) != std::string_view::npos)
-      fail("the value is not valid TOML: " + std::string(e.description()));
-  }
-  if (!is_toml && std::string_view("[{\"'").find(value_text.front()) != std::string_view::npos)
-    fail("the value is not valid TOML");
-
-  toml::table* table = root[section_name].as_table();
-  if (!root.contains(section_name)) {
-    root.insert(section_name, toml::table{});
-    table = root[section_name].as_table();
-  }
-  if (!table)  // the file has "section = value" at the top level; the structure check reports it
-    fail("[" + section_name + "] is not a section in the scene file");
-  if (is_toml)
-    table->insert_or_assign(key_name, parsed["value"]);
-  else
-    table->insert_or_assign(key_name, value_text);
-  // One quantity, two ways to give it (alternatives()): the key set here replaces the other one.
-  if (const char* other = alternative_of(section_name, key_name)) table->erase(other);
-  return name;
-}
+using namespace scene_toml;
 
 // ---- the scene -----------------------------------------------------------------------------------
 
@@ -709,11 +91,9 @@ DragLaw drag_law(const SceneReader& in, const ToolAccepts& accepts) {
   in.fail_value("fluid", "drag", rule);
 }
 
-Scene build_scene(const SceneReader& in, const ToolAccepts& accepts) {
-  Scene s;
-
-  // [particles]
-  ParticlesConfig& p = s.particles;
+/// [particles]: diameter, density, solids fraction (required), parcel size, initial rms speed, seed.
+ParticlesConfig read_particles(const SceneReader& in) {
+  ParticlesConfig p;
   p.diameter_m = in.positive("particles", "diameter", in.required("particles", "diameter"));
   p.density_kg_m3 = in.positive("particles", "density", in.required("particles", "density"));
   p.solids_fraction =
@@ -731,10 +111,15 @@ Scene build_scene(const SceneReader& in, const ToolAccepts& accepts) {
     if (*v < 0) in.fail_value("particles", "seed", "must be an integer >= 0");
     p.seed = static_cast<std::uint64_t>(*v);
   }
+
+  return p;
+}
+
+/// [domain]: the box (size_dp or size, every edge >= 4 parcel diameters) and gravity.
+DomainConfig read_domain(const SceneReader& in, const ParticlesConfig& p) {
+  DomainConfig domain;
   const double d = p.diameter_m;
   const double parcel_d = p.parcel_size * d;
-
-  // [domain]
   const bool has_size_dp = in.has("domain", "size_dp"), has_size = in.has("domain", "size");
   if (!has_size_dp && !has_size)
     in.fail(
@@ -744,7 +129,7 @@ Scene build_scene(const SceneReader& in, const ToolAccepts& accepts) {
   const Vec3 size_given = *in.vec3("domain", size_key);
   for (int i = 0; i < 3; ++i) {
     const double edge_m = has_size_dp ? size_given[i] * d : size_given[i];
-    s.domain.size_m[i] = edge_m;
+    domain.size_m[i] = edge_m;
     if (!(edge_m >= 4.0 * parcel_d)) {
       const std::string minimum = has_size_dp
                                       ? SceneReader::format_short(4.0 * p.parcel_size) + " primary diameters"
@@ -754,11 +139,14 @@ Scene build_scene(const SceneReader& in, const ToolAccepts& accepts) {
                         "xyz"[i] + " is too small");
     }
   }
-  if (auto g = in.vec3("domain", "gravity")) s.domain.gravity_m_s2 = *g;
-  const double g = norm(s.domain.gravity_m_s2);
+  if (auto g = in.vec3("domain", "gravity")) domain.gravity_m_s2 = *g;
 
-  // [contact]
-  ContactConfig& c = s.contact;
+  return domain;
+}
+
+/// [contact]: the contact law and its parameters; a spring-dashpot needs stiffness or gamma_star.
+ContactConfig read_contact(const SceneReader& in) {
+  ContactConfig c;
   c.model = in.choice<ContactModel>(
       "contact", "model", {{"spring-dashpot", ContactModel::SpringDashpot}, {"none", ContactModel::None}},
       c.model);
@@ -778,7 +166,16 @@ Scene build_scene(const SceneReader& in, const ToolAccepts& accepts) {
     in.fail(std::string("contact.stiffness is missing: with contact.model = \"") + to_string(c.model) +
             "\" give contact.stiffness (N/m) or contact.gamma_star (dimensionless, needs a [fluid] section)");
 
-  // [fluid]
+  return c;
+}
+
+/// [fluid] (absent: a dry run, and gamma_star is refused): density below the particles', viscosity,
+/// Courant number, coupling, drag law (the tool's ToolAccepts), the model file and its checksum, the grid
+/// (cells or dx_over_dp; required when the fluid is solved).
+std::optional<FluidConfig> read_fluid(const SceneReader& in, const ToolAccepts& accepts, const Scene& s) {
+  const ParticlesConfig& p = s.particles;
+  const ContactConfig& c = s.contact;
+  const double d = p.diameter_m;
   if (in.has_section("fluid")) {
     FluidConfig f;
     if (auto v = in.number("fluid", "density")) f.density_kg_m3 = *v;
@@ -848,7 +245,16 @@ Scene build_scene(const SceneReader& in, const ToolAccepts& accepts) {
       in.fail(std::string("fluid.cells is missing: required when the fluid is solved (fluid.coupling = \"") +
               to_string(f.coupling) +
               "\"); give fluid.cells = [nx, ny, nz] or fluid.dx_over_dp (a quiescent fluid needs no grid)");
-    s.fluid = f;
+    // Model A needs -V_p grad p on the particles when they act on the fluid: without it the fluid's
+    // -eps grad p' (the periodic part) has no counterpart, and the mixture momentum drifts (0.6 m/s^2 at
+    // phi = 0.1). One-way and quiescent runs may switch it off (no momentum goes back to the fluid).
+    if (f.coupling == Coupling::TwoWay && !f.pressure_gradient_force)
+      in.fail_value("fluid", "pressure_gradient_force",
+                    "must be true with fluid.coupling = \"two-way\": without the pressure-gradient force on the "
+                    "particles the fluid's periodic pressure gradient has no counterpart and the mixture momentum "
+                    "is not conserved (docs/models.md \"Periodic driving\"); switch it off only with "
+                    "fluid.coupling = \"one-way\" or \"quiescent\"");
+    return f;
   } else {
     if (c.gamma_star)
       in.fail_value(
@@ -857,8 +263,13 @@ Scene build_scene(const SceneReader& in, const ToolAccepts& accepts) {
           "without a fluid; give contact.stiffness (N/m) instead");
   }
 
-  // [run]
-  RunConfig& r = s.run;
+  return std::nullopt;
+}
+
+/// [run], the keys read before the derived numbers: the t_ref keys need a fluid, the checkpoint
+/// interval, the explicit DEM step (its times are read by read_run_times, with t_ref known).
+RunConfig read_run(const SceneReader& in, const Scene& s) {
+  RunConfig r;
   for (const char* key : {"end_time_tref", "dump_interval_tref", "series_interval_tref", "sampling_start_tref"})
     if (in.has("run", key) && !s.fluid)
       in.fail_value("run", key,
@@ -868,8 +279,12 @@ Scene build_scene(const SceneReader& in, const ToolAccepts& accepts) {
     r.checkpoint_wall_s = in.positive("run", "checkpoint_wall_s", *v);
   if (auto v = in.number("run", "dt")) r.dt_s = in.positive("run", "dt", *v);
 
-  // [numerics]
-  NumericsConfig& nm = s.numerics;
+  return r;
+}
+
+/// [numerics]: the numerical limits, each in its range.
+NumericsConfig read_numerics(const SceneReader& in) {
+  NumericsConfig nm;
   if (auto v = in.number("numerics", "void_fraction_floor"))
     nm.void_fraction_floor = in.in_range("numerics", "void_fraction_floor", *v, 0.0, 1.0, false);
   if (auto v = in.number("numerics", "overlap_limit"))
@@ -887,11 +302,22 @@ Scene build_scene(const SceneReader& in, const ToolAccepts& accepts) {
     nm.sort_interval_steps = *v;
   }
 
+  return nm;
+}
+
+/// The derived numbers of docs/models.md that the rest of the scene needs: volumes and masses of the
+/// particle and the parcel; with a fluid the Stokes relaxation time and, with gravity, u_t, Re_p, Fr_p,
+/// L_ref, L_char and t_ref (without gravity the keys that need them are refused).
+void derive_scales(const SceneReader& in, Scene& s) {
+  const ParticlesConfig& p = s.particles;
+  const ContactConfig& c = s.contact;
+  const double d = p.diameter_m;
+  const double g = norm(s.domain.gravity_m_s2);
   // ---- derived numbers (docs/models.md) ----
   DerivedScales& x = s.derived;
   x.particle_volume_m3 = sphere_volume(d);
   x.particle_mass_kg = p.density_kg_m3 * x.particle_volume_m3;
-  x.parcel_diameter_m = parcel_d;
+  x.parcel_diameter_m = p.parcel_size * d;
   x.parcel_mass_kg = std::pow(p.parcel_size, 3) * x.particle_mass_kg;
 
   if (s.fluid) {
@@ -918,8 +344,13 @@ Scene build_scene(const SceneReader& in, const ToolAccepts& accepts) {
     }
   }
 
-  // run times, possibly in units of t_ref; one rule per key: the end time > 0, the intervals and the
-  // start of the sampling window >= 0
+}
+
+/// [run]'s times, in s or in units of t_ref: the end time > 0, the intervals and the start of the
+/// sampling window >= 0 (by default the first 15 t_ref are transient).
+void read_run_times(const SceneReader& in, Scene& s) {
+  RunConfig& r = s.run;
+  const DerivedScales& x = s.derived;
   const auto time_key = [&](const char* seconds_key, const char* tref_key,
                             bool positive) -> std::optional<double> {
     const bool has_t = in.has("run", tref_key);
@@ -937,6 +368,18 @@ Scene build_scene(const SceneReader& in, const ToolAccepts& accepts) {
   // the window of time averages (cgd-coarse's slip): by default the first 15 t_ref are transient
   r.sampling_start_s = time_key("sampling_start", "sampling_start_tref", false).value_or(15.0 * x.t_ref_s);
 
+}
+
+/// The contact parameters of the parcels and the DEM step (contact.t_star x t_c, run.dt without
+/// contacts, or t_star x the Stokes relaxation time), the fluid grid and its Courant step at u_t, the
+/// particle count and the memory estimate.
+void derive_steps(const SceneReader& in, Scene& s) {
+  const ParticlesConfig& p = s.particles;
+  const ContactConfig& c = s.contact;
+  const RunConfig& r = s.run;
+  DerivedScales& x = s.derived;
+  const double d = p.diameter_m;
+  const double g = norm(s.domain.gravity_m_s2);
   if (s.has_contacts()) {
     const double k_n_primary =
         c.stiffness_n_N_m ? *c.stiffness_n_N_m
@@ -982,7 +425,20 @@ Scene build_scene(const SceneReader& in, const ToolAccepts& accepts) {
   if (count > 9e15) in.fail_value("particles", "solids_fraction", "gives more particles than can be counted");
   x.particle_count = static_cast<std::int64_t>(count);
 
-  // ---- nonsense that validates key by key but cannot be run (issue 10, item 5) ----
+  // Measured peak per particle (bench/README.md): ~300 B of DEM arrays (state, neighbour list with
+  // history, ghosts; measured before the in-place integration of issue 17 dropped the second state buffer, so now
+  // a little high) plus placement and I/O buffers: 450 B is the peak seen at 200k-600k particles.
+  x.memory_estimate_bytes = count * 450.0;
+  if (s.solves_fluid())
+    x.memory_estimate_bytes +=
+        16.0 * sizeof(double) * double(x.cells[0]) * double(x.cells[1]) * double(x.cells[2]);
+}
+
+/// Scenes that validate key by key but cannot be run, refused before anything is written (and the
+/// odd ones that may be meant, kept as warnings).
+void check_runnable(const SceneReader& in, Scene& s) {
+  const RunConfig& r = s.run;
+  const DerivedScales& x = s.derived;
   // The drag laws' range (core/drag.hpp): Beetstra was fitted to lattice-Boltzmann data for Re < 1000, Wen-Yu's
   // C_d switches to Newton's 0.44 above 1000, Stokes drag holds for Re << 1. A terminal Reynolds number far
   // outside is almost always a unit mistake (a diameter in um or mm given as m).
@@ -1008,13 +464,23 @@ Scene build_scene(const SceneReader& in, const ToolAccepts& accepts) {
     s.warnings.push_back("fluid.drag = \"stokes\" at Re_p = " + SceneReader::format_short(x.re_p) +
                          ": Stokes drag holds for Re_p << 1 and underestimates the drag here by 1 + 0.15 Re^0.687 = " +
                          SceneReader::format_short(1.0 + 0.15 * std::pow(x.re_p, 0.687)));
-  // Measured peak per particle (bench/README.md): ~300 B of DEM arrays (state, neighbour list with
-  // history, ghosts; measured before the in-place integration of issue 17 dropped the second state buffer, so now
-  // a little high) plus placement and I/O buffers: 450 B is the peak seen at 200k-600k particles.
-  x.memory_estimate_bytes = count * 450.0;
-  if (s.solves_fluid())
-    x.memory_estimate_bytes +=
-        16.0 * sizeof(double) * double(x.cells[0]) * double(x.cells[1]) * double(x.cells[2]);
+}
+
+/// The scene from a checked table: one reader per section, then the derived numbers and the refusals, in
+/// the order in which the keys depend on each other (the t_ref-based times need u_t and g, the DEM step
+/// needs the contacts and run.dt).
+Scene build_scene(const SceneReader& in, const ToolAccepts& accepts) {
+  Scene s;
+  s.particles = read_particles(in);
+  s.domain = read_domain(in, s.particles);
+  s.contact = read_contact(in);
+  s.fluid = read_fluid(in, accepts, s);
+  s.run = read_run(in, s);
+  s.numerics = read_numerics(in);
+  derive_scales(in, s);
+  read_run_times(in, s);
+  derive_steps(in, s);
+  check_runnable(in, s);
   return s;
 }
 

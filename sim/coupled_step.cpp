@@ -19,7 +19,7 @@ PeriodicDriving periodic_driving(const Scene& scene) {
   const double rho_mix = phi * rho_p + (1.0 - phi) * rho_f;
   // density whose weight the mean pressure gradient carries (see coupled_step.hpp)
   double carried = rho_f;
-  if (f.coupling == Coupling::TwoWay) carried = f.pressure_gradient_force ? rho_mix : rho_mix / (1.0 - phi);
+  if (f.coupling == Coupling::TwoWay) carried = rho_mix;  // with the force on (scene validation)
   const Vec3& g = scene.domain.gravity_m_s2;
   PeriodicDriving d;
   for (int c = 0; c < 3; ++c) {

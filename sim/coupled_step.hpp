@@ -22,17 +22,15 @@ namespace cgd {
 /// alone when it is off), chosen so that the fluid carries what the coupling makes it carry:
 ///   two-way, pressure-gradient force on:  G = rho_mix g, rho_mix = <phi> rho_p + <eps> rho_f:
 ///       fluid eps (rho_f - rho_mix) g, particles g (1 - rho_mix/rho_p); net force on the box zero;
-///   two-way, pressure-gradient force off: G = rho_mix g / <eps> (the particles feel no pressure, so the
-///       fluid alone must carry the mixture's weight): fluid eps (rho_f - rho_mix/<eps>) g, particles g;
-///       net force <eps> V (rho_f - rho_mix/<eps>) g + <phi> V rho_p g = 0;
+///   two-way, pressure-gradient force off: refused by scene validation (core/scene.cpp read_fluid): the
+///       fluid's -eps grad p' (p' the periodic part) would have no counterpart on the particles, so the
+///       mixture momentum would not be conserved;
 ///   one-way: the particles do not act on the fluid (no drag on it, and it is solved with eps = 1,
 ///       coupler.hpp), so it carries no particle weight: G = rho_f g (hydrostatic), the fluid gets no body
 ///       force and a fluid at rest stays at rest; the particles see the fluid's buoyancy, g (1 - rho_f/rho_p)
 ///       (force on: the same as a quiescent fluid), or g (force off), and settle at their single-particle
 ///       drag balance. With rho_mix instead, nothing balanced the fluid's eps (rho_f - rho_mix) g (-565 m/s^2
 ///       at <phi> = 0.05) and the fluid accelerated without bound.
-/// Without the pressure-gradient force (two-way) the fluid's -eps grad p' (p' the periodic part) has no
-/// counterpart on the particles, so the mixture momentum is not conserved exactly (model A needs the force).
 struct PeriodicDriving {
   Vec3 pressure_gradient_mean_Pa_m{};  // G, removed from the solved pressure
   Vec3 fluid_body_force_N_m3{};        // rho_f g - G, per fluid volume (the fluid gets eps times it)
