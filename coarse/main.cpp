@@ -1,5 +1,5 @@
 // cgd-coarse: coarse-grid CFD-DEM and CFD-DPM (parcels) runs of a scene, with a microscopic or a
-// filtered drag law, and the time-averaged slip they give against a resolved reference (design.md
+// filtered drag law, and the time-averaged slip they give against a resolved reference (README.md
 // "Command lines"; docs/coarse.md). A thin driver over the engine of cgd-generate.
 #include <mpi.h>
 

@@ -1,4 +1,4 @@
-// cgd::schema — the file schema of design.md ("Files (HDF5 schema, version 1)"): common root
+// cgd::schema — the file schema of ARCHITECTURE.md "Files" and docs/schema-run.md: common root
 // attributes and /params, and snapshots. The series is core/series.cpp, the checkpoint core/checkpoint.cpp,
 // run.xmf core/xdmf.cpp.
 #include "core/output.hpp"

@@ -1,5 +1,5 @@
 // cgd-filter: filtered slip and filtered drag coefficient of resolved runs, per filter width, binned by
-// the filtered solids fraction (design.md "The pipeline"; docs/schema-filtered.md). A thin driver.
+// the filtered solids fraction (ARCHITECTURE.md "The pipeline and its data flow"; docs/schema-filtered.md). A thin driver.
 #include <mpi.h>
 
 #include <CLI/CLI.hpp>

@@ -1,4 +1,4 @@
-// cgd-fit: filtered files -> drag model file (design.md "Command lines"; docs/fit.md). A thin driver:
+// cgd-fit: filtered files -> drag model file (README.md "Command lines"; docs/fit.md). A thin driver:
 // parse, read and check every input (nothing is written before that succeeds), fit, report, write.
 #include <mpi.h>
 

@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# e2e: cgd-fit refuses bad input the way design.md "Command lines" says: exit status 2, a message on
+# e2e: cgd-fit refuses bad input the way README.md "Command lines" says: exit status 2, a message on
 # stderr naming the file and the key, and nothing written (the -o model file does not exist afterwards).
 # Also: a good file is fitted (exit 0, model written), --help/--version exit 0, and cgd-generate refuses
 # the filtered laws (a resolved run uses a microscopic law) and a drag model file that does not exist.

@@ -3,7 +3,7 @@
 # Scene validation accepts particles.solids_fraction < 0.64 (core/scene.cpp), the placement reaches
 # 0.60 (sim/dem/placement.hpp kMaxPlacementFraction) and throws InputError above it -- but only in
 # RunDriver::initial_state(), after run() has created the run directory, snapshots/ and scene.toml
-# (sim/run.cpp run()). Exit status 2 must mean "nothing written" (design.md "Command lines"); here the
+# (sim/run.cpp run()). Exit status 2 must mean "nothing written" (README.md "Command lines"); here the
 # directory is left behind, and the next attempt with the same -o is refused as "already holds files".
 # The same holds for the other placement refusals (RSA stalled, growth not converged).
 source "$(dirname "$0")/lib_stability.sh"

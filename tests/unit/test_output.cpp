@@ -1,4 +1,4 @@
-// The file schema (design.md "Files (HDF5 schema, version 1)") in one process: a snapshot read back
+// The file schema (ARCHITECTURE.md "Files", docs/schema-run.md) in one process: a snapshot read back
 // field by field, the series round trip and truncation, a run's series columns, the checkpoint round
 // trip, and run.xmf.
 //
