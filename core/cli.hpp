@@ -1,5 +1,5 @@
 #pragma once
-// The shared command-line front of the cgd tools (design.md, "Command lines").
+// The shared command-line front of the cgd tools (README.md "Command lines", ARCHITECTURE.md "Errors and exit statuses").
 //
 // A tool's main is
 //
@@ -16,7 +16,7 @@
 //     return status;
 //   }
 //
-// run_tool turns the error kinds into the exit statuses of design.md: InputError -> 2 ("error: ..."),
+// run_tool turns the error kinds into the exit statuses of README.md "Exit statuses": InputError -> 2 ("error: ..."),
 // RunError -> 1 ("run failed: ..."), Interrupted -> 128 + signal ("run interrupted: ...": 130 for SIGINT,
 // 143 for SIGTERM), a bad option -> 2 (CLI11's message), --help/--version -> 0.
 // Under MPI only rank 0 prints.

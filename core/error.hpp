@@ -1,5 +1,5 @@
 #pragma once
-// The two error kinds every cgd tool distinguishes (design.md, "Command lines"):
+// The two error kinds every cgd tool distinguishes (README.md "Command lines", ARCHITECTURE.md "Errors and exit statuses"):
 //   InputError   -> exit status 2: a bad scene, file or option; nothing has been written.
 //   RunError     -> exit status 1: a run that failed (numerical blow-up, I/O failure) after it started.
 //   Interrupted  -> exit status 128 + signal (130 for SIGINT, 143 for SIGTERM, the shell's convention): a

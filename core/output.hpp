@@ -1,5 +1,5 @@
 #pragma once
-// The one place that knows the file schema (design.md, "Files (HDF5 schema, version 1)").
+// The one place that knows the file schema (ARCHITECTURE.md "Files", docs/schema-run.md).
 #include <mpi.h>
 
 #include <cstdint>

@@ -1,6 +1,6 @@
 #pragma once
 // The periodic Cartesian grid of the fluid fields, as the engine solves them and the snapshot stores
-// them (design.md "Files"): n_x x n_y x n_z cells of edge (h_x, h_y, h_z) from `origin`, periodic in
+// them (ARCHITECTURE.md "Files"): n_x x n_y x n_z cells of edge (h_x, h_y, h_z) from `origin`, periodic in
 // every direction, cell (i, j, k) spanning [origin + (i, j, k) h, origin + (i+1, j+1, k+1) h).
 // Cell arrays are in file order (k, j, i), x fastest. Shared by the engine's output and the filter.
 #include <array>

@@ -1,5 +1,5 @@
 #pragma once
-// The one reader of snapshot files and run directories (design.md "Files"; the writer is
+// The one reader of snapshot files and run directories (ARCHITECTURE.md "Files"; the writer is
 // core/output.hpp). Used by the filter and by anything else that reads what cgd-generate wrote.
 #include <mpi.h>
 
