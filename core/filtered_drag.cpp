@@ -228,30 +228,14 @@ DragModel load_drag_model(const std::string& path) {
                      ": this build reads version " + std::to_string(schema::kFormatVersion));
   DragModel m;
   m.path = path;
-  for (const char* key :
-       {"base_drag", "u_t_convention", "u_t_m_s", "l_char_m", "phi_crit", "h_max", "diameter_m",
-        "particle_density_kg_m3", "fluid_density_kg_m3", "fluid_viscosity_Pa_s", "gravity_m_s2"})
-    need(key);
-  const std::string base = f.attr_string("/", "base_drag");
-  if (const auto law = microscopic_drag_law(base))
-    m.base_law = *law;
-  else
-    throw InputError(
-        path + ": base_drag = \"" + base +
-        "\": a model's base law must be a microscopic law (" + drag_law_names(DragKind::Micro) + ")");
+  for (const char* key : {"u_t_convention", "phi_crit", "h_max"}) need(key);
+  static_cast<PhysicalSystem&>(m) = read_physical_system(f, "base_drag", "drag model file");
   m.u_t_convention = f.attr_string("/", "u_t_convention");
   if (m.u_t_convention != kUtConvention)
     throw InputError(path + ": u_t_convention = \"" + m.u_t_convention + "\": this build uses \"" +
                      kUtConvention + "\" (docs/models.md)");
-  m.u_t_m_s = f.attr_double("/", "u_t_m_s");
-  m.l_char_m = f.attr_double("/", "l_char_m");
   m.phi_crit = f.attr_double("/", "phi_crit");
   m.h_max = f.attr_double("/", "h_max");
-  m.diameter_m = f.attr_double("/", "diameter_m");
-  m.particle_density_kg_m3 = f.attr_double("/", "particle_density_kg_m3");
-  m.fluid_density_kg_m3 = f.attr_double("/", "fluid_density_kg_m3");
-  m.fluid_viscosity_Pa_s = f.attr_double("/", "fluid_viscosity_Pa_s");
-  m.gravity_m_s2 = f.attr_double("/", "gravity_m_s2");
   if (!(m.l_char_m > 0) || !(m.phi_crit > 0 && m.phi_crit < 1) || !(m.h_max > 0 && m.h_max < 1))
     throw InputError(path + ": l_char_m must be > 0, phi_crit and h_max in (0, 1)");
   // width_exponent arrived after version 1's first files: absent means the paper's form (n = 1)
@@ -293,22 +277,10 @@ DragModel load_drag_model(const std::string& path) {
 void check_model_matches_scene(const DragModel& model, const Scene& scene) {
   const std::string where = model.path + " (model) and " + scene.source_path + " (scene)";
   if (!scene.fluid) throw InputError(where + ": the scene has no [fluid] section; a drag model needs one");
-  auto same = [](double a, double b) { return std::abs(a - b) <= 1e-6 * std::max(std::abs(a), std::abs(b)); };
-  auto compare = [&](const char* scene_key, const char* model_key, double scene_value, double model_value) {
-    if (!same(scene_value, model_value))
-      throw InputError(where + " are for different particle/fluid systems: " + scene_key + " = " +
-                       number(scene_value) + " in the scene, " + model_key + " = " + number(model_value) +
-                       " in the model file; fit a model for this system or use its scene");
-  };
-  const Vec3& g = scene.domain.gravity_m_s2;
-  compare("particles.diameter", "diameter_m", scene.particles.diameter_m, model.diameter_m);
-  compare("particles.density", "particle_density_kg_m3", scene.particles.density_kg_m3,
-          model.particle_density_kg_m3);
-  compare("fluid.density", "fluid_density_kg_m3", scene.fluid->density_kg_m3, model.fluid_density_kg_m3);
-  compare("fluid.viscosity", "fluid_viscosity_Pa_s", scene.fluid->viscosity_Pa_s, model.fluid_viscosity_Pa_s);
-  compare("|domain.gravity|", "gravity_m_s2", std::sqrt(g[0] * g[0] + g[1] * g[1] + g[2] * g[2]),
-          model.gravity_m_s2);
-  compare("L_char (derived)", "l_char_m", scene.derived.l_char_m, model.l_char_m);
+  if (const auto d = compare_systems(physical_system(scene, model.micro_drag), model, /*compare_law=*/false))
+    throw InputError(where + " are for different particle/fluid systems: " + d->scene_key + " = " + d->first +
+                     " in the scene, " + d->file_key + " = " + d->second +
+                     " in the model file; fit a model for this system or use its scene");
 }
 
 }  // namespace cgd

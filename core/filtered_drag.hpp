@@ -27,6 +27,7 @@
 
 #include "core/checksum.hpp"
 #include "core/drag.hpp"
+#include "core/physical_system.hpp"
 #include "core/scene.hpp"
 
 namespace cgd {
@@ -64,15 +65,14 @@ struct BSpline {
 };
 
 /// A drag model file (cgd_format = "drag_model", docs/schema-drag-model.md) as read by
-/// load_drag_model: what the evaluator needs and what a run checks against its own scene.
-struct DragModel {
+/// load_drag_model: what the evaluator needs and what a run checks against its own scene. It extends
+/// the physical system it was made for (core/physical_system.hpp: d, densities, viscosity, |g|, u_t,
+/// L_char, and the base law as micro_drag, stored as `base_drag`).
+struct DragModel : PhysicalSystem {
   std::string path;      // as given
   std::string checksum;  // FNV-1a 64-bit of the file's bytes, 16 hex digits
-  DragLaw base_law = DragLaw::Beetstra;
   std::string u_t_convention;  // "schiller-naumann" (docs/models.md)
-  double u_t_m_s = 0, l_char_m = 0, phi_crit = 0.016;
-  double diameter_m = 0, particle_density_kg_m3 = 0, fluid_density_kg_m3 = 0, fluid_viscosity_Pa_s = 0;
-  double gravity_m_s2 = 0;  // |g|
+  double phi_crit = 0.016;
   BSpline h_spline;         // h on [phi_crit, phi_max] (identity, clamped to [0, h_max])
   BSpline log_a_spline;     // log a on [phi_crit, phi_max]
   // the range of log a the per-bin fits identified (attributes log_a_min, log_a_max; absent in older
@@ -185,7 +185,7 @@ decltype(auto) visit_any_drag_law(DragLaw law, const DragParams& params, const F
     const double F_to_n = std::pow(m.l_char_m / setup.filter_width_m, m.width_exponent);
     const double corr = setup.parcel_correction ? parcel_correction(setup.parcel_size, m.c_corr_a, m.c_corr_k) : 1.0;
     const SplineCurves curves{&m};
-    return visit_drag_law(m.base_law, params, [&](const auto& micro) {
+    return visit_drag_law(m.micro_drag, params, [&](const auto& micro) {
       return visit(FilteredDrag<std::decay_t<decltype(micro)>, SplineCurves>(micro, curves, F_to_n, corr));
     });
   }
@@ -202,10 +202,9 @@ double beta_p(DragLaw law, const DragParams& params, const FilteredDragSetup& se
 DragModel load_drag_model(const std::string& path);
 
 /// InputError naming `model.path`, the scene's file and the differing key, unless the model was made
-/// for the scene's particle/fluid system: particles.diameter, particles.density, fluid.density,
-/// fluid.viscosity and |domain.gravity| (relative 1e-6, the files store them to full precision), and
-/// the derived L_char (relative 1e-6). The model's base law must be a microscopic law (a model file
-/// cannot be based on another filtered law).
+/// for the scene's particle/fluid system (compare_systems of core/physical_system.hpp without the law:
+/// particles.diameter, particles.density, fluid.density, fluid.viscosity, |domain.gravity|, and the
+/// derived u_t and L_char, relative 1e-6).
 void check_model_matches_scene(const DragModel& model, const Scene& scene);
 
 /// "schiller-naumann": the u_t convention of docs/models.md that every cgd file uses.

@@ -1,6 +1,7 @@
 #include "core/snapshot.hpp"
 
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <regex>
@@ -44,6 +45,28 @@ RunPhysics read_physics(const h5::File& f) {
   }
   return p;
 }
+
+}  // namespace
+
+PhysicalSystem RunPhysics::system() const {
+  const auto law = microscopic_drag_law(drag);
+  if (!has_fluid || !law)
+    throw InputError(scene_name + ": the run's drag law is '" + drag + "': its physical system needs a fluid and a "
+                     "microscopic law (" + drag_law_names(DragKind::Micro) + ")");
+  PhysicalSystem s;
+  s.micro_drag = *law;
+  s.u_t_m_s = u_t_m_s;
+  s.l_char_m = l_char_m;
+  s.diameter_m = diameter_m;
+  s.particle_density_kg_m3 = particle_density_kg_m3;
+  s.fluid_density_kg_m3 = fluid_density_kg_m3;
+  s.fluid_viscosity_Pa_s = fluid_viscosity_Pa_s;
+  const auto& g = gravity_m_s2;
+  s.gravity_m_s2 = std::sqrt(g[0] * g[0] + g[1] * g[1] + g[2] * g[2]);
+  return s;
+}
+
+namespace {
 
 template <class T>
 void check_rows(const std::string& path, const std::string& name, const std::vector<T>& v, std::int64_t rows, int cols) {

@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "core/periodic_grid.hpp"
+#include "core/physical_system.hpp"
 
 namespace cgd {
 
@@ -23,6 +24,10 @@ struct RunPhysics {
   std::string drag, coupling;                  // e.g. "beetstra", "two-way" (empty without fluid)
   bool pressure_gradient_force = false;        // the particles feel -V_p grad p
   double u_t_m_s = 0, l_char_m = 0, t_ref_s = 0;
+
+  /// The run's physical system (core/physical_system.hpp), |g| the norm of gravity_m_s2. InputError
+  /// naming the scene when the run has no fluid or its law `drag` is not microscopic (a coarse run's).
+  PhysicalSystem system() const;
 };
 
 /// One snapshot: particles (owned by the file, all of them) and, in coupled runs, the fluid fields.

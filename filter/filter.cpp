@@ -1,10 +1,12 @@
 #include "filter/filter.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <filesystem>
 #include <functional>
 #include <numbers>
+#include <optional>
 #include <queue>
 #include <sstream>
 
@@ -47,19 +49,27 @@ std::uint64_t mix(std::uint64_t x) {
   return x ^ (x >> 31);
 }
 
-/// The physics that pooled runs must share: each key's name and its value as text (6 significant
-/// digits), compared exactly.
-std::vector<std::pair<std::string, std::string>> physics_keys(const RunPlan& r) {
-  const RunPhysics& p = r.physics;
-  return {{"particles.diameter (m)", fmt(p.diameter_m)},
-          {"particles.density (kg/m^3)", fmt(p.particle_density_kg_m3)},
-          {"particles.parcel_size", fmt(p.parcel_size)},
-          {"fluid.density (kg/m^3)", fmt(p.fluid_density_kg_m3)},
-          {"fluid.viscosity (Pa s)", fmt(p.fluid_viscosity_Pa_s)},
-          {"fluid.drag", p.drag},
-          {"fluid.pressure_gradient_force", p.pressure_gradient_force ? "true" : "false"},
-          {"domain.gravity (m/s^2)", fmt(p.gravity_m_s2[0]) + "," + fmt(p.gravity_m_s2[1]) + "," + fmt(p.gravity_m_s2[2])},
-          {"grid spacing (m)", fmt(r.grid.spacing_m[0]) + "," + fmt(r.grid.spacing_m[1]) + "," + fmt(r.grid.spacing_m[2])}};
+/// The first difference between two runs that cannot be pooled: their physical system
+/// (compare_systems, core/physical_system.hpp: d, densities, viscosity, |g|, u_t, L_char to 1e-6 relative,
+/// the law exactly), then the parcel size, the pressure-gradient force, the direction of gravity and the
+/// grid spacing (1e-6 relative). {key, value in a, value in b}, or nullopt.
+std::optional<std::array<std::string, 3>> pooling_difference(const RunPlan& a, const RunPlan& b) {
+  if (const auto d = compare_systems(a.physics.system(), b.physics.system())) return {{d->scene_key, d->first, d->second}};
+  const RunPhysics &p = a.physics, &q = b.physics;
+  auto same = [](double x, double y) { return std::abs(x - y) <= 1e-6 * std::max(std::abs(x), std::abs(y)); };
+  auto triple = [](const std::array<double, 3>& v) { return fmt(v[0]) + "," + fmt(v[1]) + "," + fmt(v[2]); };
+  auto same3 = [&](const std::array<double, 3>& x, const std::array<double, 3>& y) {
+    return same(x[0], y[0]) && same(x[1], y[1]) && same(x[2], y[2]);
+  };
+  if (!same(p.parcel_size, q.parcel_size)) return {{"particles.parcel_size", fmt(p.parcel_size), fmt(q.parcel_size)}};
+  if (p.pressure_gradient_force != q.pressure_gradient_force)
+    return {{"fluid.pressure_gradient_force", p.pressure_gradient_force ? "true" : "false",
+             q.pressure_gradient_force ? "true" : "false"}};
+  if (!same3(p.gravity_m_s2, q.gravity_m_s2))
+    return {{"domain.gravity (m/s^2)", triple(p.gravity_m_s2), triple(q.gravity_m_s2)}};
+  if (!same3(a.grid.spacing_m, b.grid.spacing_m))
+    return {{"grid spacing (m)", triple(a.grid.spacing_m), triple(b.grid.spacing_m)}};
+  return std::nullopt;
 }
 
 }  // namespace
@@ -192,15 +202,12 @@ FilterPlan plan_filter(const FilterOptions& o) {
       throw InputError(dir + ": no snapshot at or after the --from time (" +
                        (o.from_tref ? fmt(*o.from_tref) + " t_ref" : fmt(*o.from_time_s) + " s") +
                        "); the run's snapshots end at step " + std::to_string(run.directory.steps.back()));
-    if (!plan.runs.empty()) {
-      const auto a = physics_keys(plan.runs.front()), b = physics_keys(run);
-      for (std::size_t k = 0; k < a.size(); ++k)
-        if (a[k].second != b[k].second)
-          throw InputError("runs of different physics cannot be pooled: " + a[k].first + " is " + a[k].second + " in " +
-                           plan.runs.front().path + " but " + b[k].second + " in " + dir +
-                           " (pooled runs share particles, fluid, drag law and grid spacing; <phi_p> and the box may differ)");
-    }
     micro_law(run);  // refuses filtered laws
+    if (!plan.runs.empty())
+      if (const auto d = pooling_difference(plan.runs.front(), run))
+        throw InputError("runs of different physics cannot be pooled: " + (*d)[0] + " is " + (*d)[1] + " in " +
+                         plan.runs.front().path + " but " + (*d)[2] + " in " + dir +
+                         " (pooled runs share particles, fluid, drag law and grid spacing; <phi_p> and the box may differ)");
     plan.runs.push_back(std::move(run));
   }
 

@@ -279,13 +279,7 @@ void write_filtered_file(const FilterPlan& plan, const FilterOptions& o, const s
       f.set_attr("/", "scene", r0.physics.scene_toml);
     }
     const RunPhysics& p = r0.physics;
-    f.set_attr("/", "micro_drag", p.drag);
-    f.set_attr("/", "u_t_m_s", p.u_t_m_s);
-    f.set_attr("/", "l_char_m", p.l_char_m);
-    f.set_attr("/", "diameter_m", p.diameter_m);
-    f.set_attr("/", "particle_density_kg_m3", p.particle_density_kg_m3);
-    f.set_attr("/", "fluid_density_kg_m3", p.fluid_density_kg_m3);
-    f.set_attr("/", "fluid_viscosity_Pa_s", p.fluid_viscosity_Pa_s);
+    write_physical_system(f, p.system(), "micro_drag");  // the runs' system, gravity_m_s2 included
     f.set_attr("/", "parcel_size", p.parcel_size);
     f.set_attr("/", "cell_size_m", std::vector<double>(r0.grid.spacing_m.begin(), r0.grid.spacing_m.end()));
     f.set_attr("/", "pressure_terms", std::int64_t{p.pressure_gradient_force ? 1 : 0});

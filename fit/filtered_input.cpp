@@ -45,21 +45,10 @@ FilteredFile read_filtered_file(const std::string& path) {
                      ": this build reads version " + std::to_string(schema::kFormatVersion));
   FilteredFile out;
   out.path = path;
-  for (const char* key : {"micro_drag", "u_t_m_s", "l_char_m", "diameter_m", "particle_density_kg_m3",
-                          "fluid_density_kg_m3", "fluid_viscosity_Pa_s", "scene"})
-    need_attr("/", key);
-  Physics& p = out.physics;
-  p.micro_drag = f.attr_string("/", "micro_drag");
-  p.u_t_m_s = f.attr_double("/", "u_t_m_s");
-  p.l_char_m = f.attr_double("/", "l_char_m");
-  p.diameter_m = f.attr_double("/", "diameter_m");
-  p.particle_density_kg_m3 = f.attr_double("/", "particle_density_kg_m3");
-  p.fluid_density_kg_m3 = f.attr_double("/", "fluid_density_kg_m3");
-  p.fluid_viscosity_Pa_s = f.attr_double("/", "fluid_viscosity_Pa_s");
+  need_attr("/", "scene");
+  out.physics = read_physical_system(f, "micro_drag", "filtered file");
   out.scene_toml = f.attr_string("/", "scene");
-  if (!microscopic_drag_law(p.micro_drag))
-    throw InputError(path + ": micro_drag = \"" + p.micro_drag +
-                     "\": the runs' law must be a microscopic law (" + drag_law_names(DragKind::Micro) + ")");
+  const PhysicalSystem& p = out.physics;
   if (!(p.l_char_m > 0)) throw InputError(path + ": l_char_m = " + number(p.l_char_m) + ": must be > 0");
 
   need("/bins/phi_edges");
@@ -178,18 +167,8 @@ void check_same_physics(const std::vector<FilteredFile>& files) {
       throw InputError(both + " are filtered files of different physics and cannot be pooled: " + key +
                        " = " + mine + " in " + o.path + ", " + theirs + " in " + ref.path);
     };
-    if (o.physics.micro_drag != ref.physics.micro_drag)
-      differ("micro_drag", "\"" + o.physics.micro_drag + "\"", "\"" + ref.physics.micro_drag + "\"");
-    const std::pair<const char*, double Physics::*> keys[] = {
-        {"diameter_m", &Physics::diameter_m},
-        {"particle_density_kg_m3", &Physics::particle_density_kg_m3},
-        {"fluid_density_kg_m3", &Physics::fluid_density_kg_m3},
-        {"fluid_viscosity_Pa_s", &Physics::fluid_viscosity_Pa_s},
-        {"u_t_m_s", &Physics::u_t_m_s},  // derived from the above and g: a different g shows here
-        {"l_char_m", &Physics::l_char_m}};
-    for (const auto& [key, member] : keys)
-      if (!same(o.physics.*member, ref.physics.*member))
-        differ(key, number(o.physics.*member), number(ref.physics.*member));
+    if (const auto d = compare_systems(o.physics, ref.physics))
+      differ(d->file_key.c_str(), d->first, d->second);
     if (o.phi_edges.size() != ref.phi_edges.size() ||
         !std::equal(o.phi_edges.begin(), o.phi_edges.end(), ref.phi_edges.begin(), same))
       throw InputError(both +

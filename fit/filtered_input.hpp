@@ -6,17 +6,11 @@
 #include <string>
 #include <vector>
 
+#include "core/physical_system.hpp"
 #include "core/scene.hpp"
 
 namespace cgd::fit {
 
-/// The physics the runs of a filtered file share (its root attributes). Files pooled into one fit
-/// must agree on every field (check_same_physics).
-struct Physics {
-  std::string micro_drag;  // beetstra, wen-yu, stokes
-  double u_t_m_s = 0, l_char_m = 0, diameter_m = 0, particle_density_kg_m3 = 0, fluid_density_kg_m3 = 0,
-         fluid_viscosity_Pa_s = 0;
-};
 
 /// One filter width of one file (`/width_<k>`, or `/whole_box`), per phi bin.
 struct WidthSeries {
@@ -38,7 +32,7 @@ struct WidthSeries {
 struct FilteredFile {
   std::string path, checksum;
   std::string scene_toml;  // root attribute `scene`
-  Physics physics;
+  PhysicalSystem physics;  // root attributes (core/physical_system.hpp); the law under micro_drag
   std::vector<double> phi_edges;       // /bins/phi_edges
   std::vector<WidthSeries> widths;     // the box widths in file order, then /whole_box if present
   std::vector<WidthSeries> grids;      // /grids/<N> (cgd-filter --grids), cells across descending; may be empty
@@ -60,8 +54,9 @@ FilteredFile read_filtered_file(const std::string& path);
 /// InputError naming the files when a file has no /grids (filter it with cgd-filter --grids).
 std::vector<FilteredFile> select_operator(const std::vector<FilteredFile>& files, const std::string& op);
 
-/// InputError naming both files and the key unless every file has the same physics (micro_drag
-/// exactly; u_t, L_char, d_p, densities, viscosity to 1e-6 relative) and the same /bins/phi_edges.
+/// InputError naming both files and the key unless every file has the same physical system
+/// (compare_systems: d_p, densities, viscosity, |g|, u_t, L_char to 1e-6 relative, micro_drag exactly)
+/// and the same /bins/phi_edges.
 void check_same_physics(const std::vector<FilteredFile>& files);
 
 }  // namespace cgd::fit

@@ -510,21 +510,13 @@ std::set<double> usable_widths(const std::vector<FilteredFile>& files, const Fit
 /// The model file's header of a fit: the files' physical system (the first file's; fit_filtered_drag's
 /// callers checked that the files agree), the options' phi_crit and h_max, the exponent n, the fitted
 /// curves, the range of log a the bins identified and the paper's c_corr.
-void fill_model(DragModel& M, const std::vector<BinEstimate>& bins, const Physics& p, const FitOptions& o, double n,
-                const Curves& main) {
-  M.base_law = microscopic_drag_law(p.micro_drag).value();  // checked when the file was read
+void fill_model(DragModel& M, const std::vector<BinEstimate>& bins, const PhysicalSystem& p, const FitOptions& o,
+                double n, const Curves& main) {
+  static_cast<PhysicalSystem&>(M) = p;  // |g| as the files store it (older files: from u_t and L_char)
   M.u_t_convention = kUtConvention;
-  M.u_t_m_s = p.u_t_m_s;
-  M.l_char_m = p.l_char_m;
   M.phi_crit = o.phi_crit;
   M.h_max = o.h_max;
   M.width_exponent = n;
-  M.diameter_m = p.diameter_m;
-  M.particle_density_kg_m3 = p.particle_density_kg_m3;
-  M.fluid_density_kg_m3 = p.fluid_density_kg_m3;
-  M.fluid_viscosity_Pa_s = p.fluid_viscosity_Pa_s;
-  // |g| from L_char = d_p Fr_p^(1/3), Fr_p = u_t^2/(g d_p) (docs/models.md)
-  M.gravity_m_s2 = p.u_t_m_s * p.u_t_m_s / (p.diameter_m * std::pow(p.l_char_m / p.diameter_m, 3));
   M.h_spline = main.h.spline;
   M.log_a_spline = main.log_a.spline;
   // the log a curve stays within the range the bins identified (docs/fit.md "Low phi")

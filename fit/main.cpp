@@ -110,9 +110,9 @@ int main(int argc, char** argv) {
       const cgd::DragModel model = cgd::load_drag_model(parcel_model);
       std::vector<cgd::fit::ParcelRun> runs;
       for (const std::string& dir : inputs) runs.push_back(cgd::fit::read_parcel_run(dir, model.u_t_m_s));
-      const cgd::DragParams params{model.fluid_density_kg_m3, model.fluid_viscosity_Pa_s, model.diameter_m};
+      const cgd::DragParams params = model.drag_params();
       const cgd::fit::ParcelFitResult r =
-          cgd::fit::fit_parcel_correction(runs, model.base_law, params, 2000, static_cast<unsigned>(options.seed));
+          cgd::fit::fit_parcel_correction(runs, model.micro_drag, params, 2000, static_cast<unsigned>(options.seed));
       cgd::fit::write_parcel_fit(parcel_model, output, r);
       if (!quiet) std::cout << cgd::fit::parcel_fit_report(r) << "wrote " << output << "\n";
       return cgd::kExitOk;

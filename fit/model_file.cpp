@@ -94,20 +94,13 @@ void write_model_file(const std::string& path, const FitResult& R, const std::ve
       }
       if (grid && !across.empty()) f.set_attr("/", "calibrated_cells_across", across);
     }
-    f.set_attr("/", "base_drag", std::string(to_string(M.base_law)));
+    write_physical_system(f, M, "base_drag");
     f.set_attr("/", "u_t_convention", M.u_t_convention);
-    f.set_attr("/", "u_t_m_s", M.u_t_m_s);
-    f.set_attr("/", "l_char_m", M.l_char_m);
     f.set_attr("/", "phi_crit", M.phi_crit);
     f.set_attr("/", "phi_max", M.h_spline.upper());
     f.set_attr("/", "h_max", M.h_max);
     f.set_attr("/", "log_a_min", M.log_a_min);
     f.set_attr("/", "log_a_max", M.log_a_max);
-    f.set_attr("/", "diameter_m", M.diameter_m);
-    f.set_attr("/", "particle_density_kg_m3", M.particle_density_kg_m3);
-    f.set_attr("/", "fluid_density_kg_m3", M.fluid_density_kg_m3);
-    f.set_attr("/", "fluid_viscosity_Pa_s", M.fluid_viscosity_Pa_s);
-    f.set_attr("/", "gravity_m_s2", M.gravity_m_s2);
     write_spline(
         f, "/h", M.h_spline,
         "S_h(phi); h = clip(S_h(phi), 0, h_max) on [phi_crit, phi_max], h(phi_crit) phi/phi_crit below, "
@@ -285,10 +278,9 @@ std::string write_grid_table_model(const std::string& path, const std::vector<Fi
     throw InputError(first.path + ": --grid-table " + std::to_string(cells_across) + ": " + std::to_string(phi.size()) +
                      " bin(s) of " + group + " have >= " + std::to_string(min_count) +
                      " samples; a table needs at least 2 (lower --min-count or filter longer runs)");
-  const Physics& p = first.physics;
+  const PhysicalSystem& p = first.physics;
   DragModel M;
-  M.base_law = microscopic_drag_law(p.micro_drag).value();
-  M.diameter_m = p.diameter_m;
+  static_cast<PhysicalSystem&>(M) = p;
   const double delta = cell_over_dp * p.diameter_m;
   BSpline h;
   h.order = 2;
@@ -314,18 +306,11 @@ std::string write_grid_table_model(const std::string& path, const std::vector<Fi
     f.set_attr("/", "calibrated_cells_across", std::vector<std::int64_t>{cells_across});
     f.set_attr("/", "width_exponent", 1.0);
     f.set_attr("/", "width_exponent_fitted", std::int64_t{0});
-    f.set_attr("/", "base_drag", std::string(to_string(M.base_law)));
+    write_physical_system(f, M, "base_drag");
     f.set_attr("/", "u_t_convention", std::string(kUtConvention));
-    f.set_attr("/", "u_t_m_s", p.u_t_m_s);
-    f.set_attr("/", "l_char_m", p.l_char_m);
     f.set_attr("/", "phi_crit", phi.front());
     f.set_attr("/", "phi_max", phi.back());
     f.set_attr("/", "h_max", h_max);
-    f.set_attr("/", "diameter_m", p.diameter_m);
-    f.set_attr("/", "particle_density_kg_m3", p.particle_density_kg_m3);
-    f.set_attr("/", "fluid_density_kg_m3", p.fluid_density_kg_m3);
-    f.set_attr("/", "fluid_viscosity_Pa_s", p.fluid_viscosity_Pa_s);
-    f.set_attr("/", "gravity_m_s2", p.u_t_m_s * p.u_t_m_s / (p.diameter_m * std::pow(p.l_char_m / p.diameter_m, 3)));
     write_spline(f, "/h", h, "H_grid(phi): order-2 B-spline = the piecewise-linear table (knots = the bins' mean phi, "
                              "coefficients = H_grid); clamped to [-1, h_max], constant outside the knots");
     write_spline(f, "/log_a", log_a, "log a = -700: a = 0 (the table has no width dependence)");
@@ -361,7 +346,7 @@ std::string fit_report(const FitResult& R, const std::vector<FilteredFile>& file
                                            : " (operator box: box filters of width Delta)");
   if (!n1 || o.fit_width_exponent) out << ", n = " << format("%.3f", R.model.width_exponent);
   out << "; " << files.size()
-      << " filtered file(s), base law " << to_string(R.model.base_law)
+      << " filtered file(s), base law " << to_string(R.model.micro_drag)
       << ", L_char = " << format("%.4g", R.model.l_char_m) << " m\n";
   int used = 0, dropped = 0;
   for (const BinEstimate& b : R.bins) (b.used ? used : dropped)++;

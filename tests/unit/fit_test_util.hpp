@@ -31,7 +31,7 @@ struct SyntheticSpec {
   std::int64_t count = 400;                              // samples per snapshot and bin
   double noise = 0.1;                                    // sd of one snapshot's H
   std::uint64_t seed = 1;
-  std::string micro_drag = "beetstra";
+  cgd::DragLaw micro_drag = cgd::DragLaw::Beetstra;
   double diameter_m = 75e-6;
   std::function<double(double phi, double F)> truth;  // H(phi, F); empty: truth_h/(1 + truth_a F)
   std::vector<double> noise_scale;                    // per width (F order; whole box last); empty: all 1
@@ -48,7 +48,8 @@ inline FilteredFile make_synthetic(const SyntheticSpec& s) {
   f.path = "synthetic_" + std::to_string(s.seed) + ".h5";
   f.checksum = "0000000000000000";
   const double d = s.diameter_m, u_t = 0.2185, l_char = 4.02 * d;
-  f.physics = {s.micro_drag, u_t, l_char, d, 1500.0, 1.3, 1.8e-5};
+  // |g| as a file without gravity_m_s2 gives it (write_filtered writes none: the older schema)
+  f.physics = {s.micro_drag, u_t, l_char, d, 1500.0, 1.3, 1.8e-5, cgd::gravity_from_scales(u_t, l_char, d)};
   const int nb = s.bins, ns = s.runs * s.snapshots;
   for (int b = 0; b <= nb; ++b) f.phi_edges.push_back(s.phi_max * b / nb);
   for (int r = 0; r < s.runs; ++r) f.run_paths.push_back("synthetic/run_" + std::to_string(r));
@@ -126,7 +127,7 @@ inline void write_filtered(const std::string& path, const FilteredFile& f, const
   h.set_attr("/", "cgd_format", format);
   h.set_attr("/", "cgd_format_version", std::int64_t{1});
   h.set_attr("/", "scene", scene_toml);
-  h.set_attr("/", "micro_drag", f.physics.micro_drag);
+  h.set_attr("/", "micro_drag", std::string(cgd::to_string(f.physics.micro_drag)));
   h.set_attr("/", "u_t_m_s", f.physics.u_t_m_s);
   h.set_attr("/", "l_char_m", f.physics.l_char_m);
   h.set_attr("/", "diameter_m", f.physics.diameter_m);

@@ -281,7 +281,8 @@ const std::vector<DemoGrid> kDemoGrids = {
 TEST(Fit, LowPhiOnTheDemoGridsKeepsTheCorrection) {
   FilteredFile f;
   f.path = "demo_grids";
-  f.physics = {"beetstra", 0.2185, 0.0003013470253420513, 75e-6, 1500.0, 1.3, 1.8e-5};
+  f.physics = {cgd::DragLaw::Beetstra, 0.2185, 0.0003013470253420513, 75e-6, 1500.0, 1.3, 1.8e-5,
+               cgd::gravity_from_scales(0.2185, 0.0003013470253420513, 75e-6)};
   for (int b = 0; b <= 16; ++b) f.phi_edges.push_back(0.01 * b);
   f.run_paths = {"demo/phi0.02", "demo/phi0.05"};
   for (const DemoGrid& g : kDemoGrids) {

@@ -195,7 +195,7 @@ cgd::DragModel line_model() {
   m.phi_crit = 0.016;
   m.h_max = 0.99;
   m.l_char_m = 3.0e-4;
-  m.base_law = DragLaw::Beetstra;
+  m.micro_drag = DragLaw::Beetstra;
   m.u_t_convention = cgd::kUtConvention;
   gsl_bspline_workspace* w = gsl_bspline_alloc(4, 6);
   gsl_bspline_knots_uniform(0.016, 0.5, w);
@@ -301,7 +301,7 @@ TEST(DragModelFile, RoundTripKeepsTheCurves) {
     EXPECT_DOUBLE_EQ(a.h(phi), b.h(phi));
     EXPECT_DOUBLE_EQ(a.a(phi), b.a(phi));
   }
-  EXPECT_EQ(m.base_law, DragLaw::Beetstra);
+  EXPECT_EQ(m.micro_drag, DragLaw::Beetstra);
   EXPECT_EQ(m.c_corr_source, "paper");
   EXPECT_EQ(m.checksum, cgd::file_checksum_fnv1a(path));
   EXPECT_NO_THROW(cgd::check_model_matches_scene(m, scene_with({})));

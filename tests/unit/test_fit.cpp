@@ -303,7 +303,7 @@ TEST(FitBadInput, TooFewWidthsOrBins) {
 
 TEST(FitBadInput, PoolingDifferentPhysicsIsRefused) {
   SyntheticSpec a, b;
-  b.micro_drag = "wen-yu";
+  b.micro_drag = cgd::DragLaw::WenYu;
   b.seed = 2;
   expect_input_error(
       [&] {

@@ -1,0 +1,69 @@
+#pragma once
+// The physical system a derived file was made for (docs/models.md's u_t and L_char conventions): the
+// particle diameter and density, the fluid density and viscosity, |g|, the derived u_t and L_char, and
+// the microscopic drag law the file's numbers are relative to. One record, one attribute writer, one
+// reader and one tolerance-based comparison, used by every file that carries it:
+//   filtered files (cgd-filter, docs/schema-filtered.md): root attributes, the law under `micro_drag`;
+//   drag model files (cgd-fit, docs/schema-drag-model.md): root attributes, the law under `base_drag`;
+//   snapshots (/params, written by core/output.cpp): RunPhysics::system() (core/snapshot.hpp);
+//   scenes: physical_system(scene).
+// The attribute names are those of the two derived formats: diameter_m, particle_density_kg_m3,
+// fluid_density_kg_m3, fluid_viscosity_Pa_s, gravity_m_s2 (|g|), u_t_m_s, l_char_m.
+// Adding a field: the member, its row in kSystemFields (core/physical_system.cpp), the schema pages.
+#include <optional>
+#include <string>
+
+#include "core/drag.hpp"
+
+namespace cgd {
+
+struct Scene;
+namespace h5 {
+class File;
+}
+
+/// The particle/fluid system (SI units). u_t is docs/models.md's (Schiller-Naumann) terminal velocity,
+/// L_char = (u_t^2/g) Fr_p^(-2/3); both derive from the others, and are stored so that a file can be
+/// used without recomputing them.
+struct PhysicalSystem {
+  DragLaw micro_drag = DragLaw::Beetstra;  // a microscopic law (kind Micro in core/drag.hpp's table)
+  double u_t_m_s = 0, l_char_m = 0;
+  double diameter_m = 0, particle_density_kg_m3 = 0, fluid_density_kg_m3 = 0, fluid_viscosity_Pa_s = 0;
+  double gravity_m_s2 = 0;  // |g|
+
+  /// The microscopic law's parameters (rho_f, mu_f, d).
+  DragParams drag_params() const { return {fluid_density_kg_m3, fluid_viscosity_Pa_s, diameter_m}; }
+};
+
+/// The system of a scene with a [fluid] section; micro_drag is the scene's law when it is microscopic,
+/// else `base_law` (a filtered law's base: the model file's, Beetstra for radl2014). InputError naming
+/// the scene without a [fluid] section.
+PhysicalSystem physical_system(const Scene& scene, DragLaw base_law = DragLaw::Beetstra);
+
+/// |g| of a system from u_t, L_char and d: L_char^3 = u_t^2 d^2 / g (docs/models.md). For files
+/// written before gravity_m_s2 was stored (filtered files).
+double gravity_from_scales(double u_t_m_s, double l_char_m, double diameter_m);
+
+/// Writes the system as root attributes of `f`, the law under `law_key` ("micro_drag", "base_drag").
+void write_physical_system(h5::File& f, const PhysicalSystem& system, const char* law_key);
+
+/// Reads the system from the root attributes of `f` (the law under `law_key`). `what` names the kind of
+/// file in messages ("filtered file", "drag model file"). InputError naming the file and the key for a
+/// missing attribute or a law that is not microscopic ("<path>: <law_key> = \"radl2014\": ..."). A file
+/// without gravity_m_s2 gets gravity_from_scales (older filtered files).
+PhysicalSystem read_physical_system(const h5::File& f, const char* law_key, const std::string& what);
+
+/// The first field in which two systems differ: its file key (e.g. "diameter_m"), its scene key
+/// ("particles.diameter") and the two values as text.
+struct SystemDifference {
+  std::string file_key, scene_key, first, second;
+};
+
+/// The comparison every user of the record makes: the numbers to `relative_tolerance` (default 1e-6:
+/// the files store them to full precision, and u_t and L_char are computed the same way everywhere),
+/// in the order d, rho_p, rho_f, mu_f, |g|, u_t, L_char, then the law (exactly) unless `compare_law` is
+/// false. nullopt when they agree.
+std::optional<SystemDifference> compare_systems(const PhysicalSystem& first, const PhysicalSystem& second,
+                                                bool compare_law = true, double relative_tolerance = 1e-6);
+
+}  // namespace cgd
