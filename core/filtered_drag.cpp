@@ -126,16 +126,15 @@ FilteredDragSetup filtered_drag_setup(const Scene& scene, const Vec3& cell_spaci
   setup.l_char_m = scene.derived.l_char_m;
   setup.parcel_size = scene.particles.parcel_size;
   setup.parcel_correction = scene.fluid->parcel_correction;
-  if (scene.fluid->drag == DragLaw::Model) {
-    auto model = std::make_shared<DragModel>(load_drag_model(scene.fluid->drag_model_path));
-    check_model_matches_scene(*model, scene);
-    setup.warnings = model_calibration_warnings(*model, setup.filter_width_m);
+  if (scene.fluid->drag == DragLaw::Model && scene.fluid->drag_model) {
+    // read and checked against the scene by load_scene: nothing is read here
+    setup.model = scene.fluid->drag_model;
+    setup.warnings = model_calibration_warnings(*setup.model, setup.filter_width_m);
     int initialised = 0, rank = 0;
     MPI_Initialized(&initialised);
     if (initialised) MPI_Comm_rank(MPI_COMM_WORLD, &rank);
     if (rank == 0)
       for (const std::string& w : setup.warnings) std::cerr << "warning: " << w << "\n";
-    setup.model = std::move(model);
   }
   check_filtered_setup(scene.fluid->drag, setup);
   return setup;

@@ -149,13 +149,12 @@ struct FilteredDragSetup {
   std::vector<std::string> warnings;       // model_calibration_warnings (printed by filtered_drag_setup)
 };
 
-/// The setup of a run's drag law from its scene: for drag = "model" the model file fluid.drag_model is
-/// read and checked against the scene (check_model_matches_scene), and its calibration against the
-/// run's Delta (model_calibration_warnings: kept in `warnings` and printed once on stderr, by rank 0 of
-/// MPI_COMM_WORLD); Delta = cube root of the cell
-/// volume (cell_spacing_m), L_char from the scene's derived scales, alpha = particles.parcel_size.
-/// Microscopic laws get an empty setup (nothing read). InputError as load_drag_model and
-/// check_model_matches_scene.
+/// The setup of a run's drag law from its scene, built once before the engine starts: for drag = "model"
+/// the model load_scene read and checked (FluidConfig::drag_model; nothing is read here) and its
+/// calibration against the run's Delta (model_calibration_warnings: kept in `warnings` and printed once
+/// on stderr, by rank 0 of MPI_COMM_WORLD); Delta = cube root of the cell volume (cell_spacing_m),
+/// L_char from the scene's derived scales, alpha = particles.parcel_size. Microscopic laws get an
+/// empty setup. InputError (check_filtered_setup) when the setup is incomplete.
 FilteredDragSetup filtered_drag_setup(const Scene& scene, const Vec3& cell_spacing_m);
 
 /// InputError unless `setup` is complete for `law` (model present for Model, Delta, L_char > 0,

@@ -28,6 +28,7 @@
 
 #include "core/checksum.hpp"
 #include "core/error.hpp"
+#include "core/filtered_drag.hpp"
 #include "core/scales.hpp"
 #include "core/scene_toml.hpp"
 
@@ -207,14 +208,18 @@ std::optional<FluidConfig> read_fluid(const SceneReader& in, const ToolAccepts& 
       std::error_code ec;
       if (!std::filesystem::is_regular_file(f.drag_model_path, ec))
         in.fail_value("fluid", "drag_model", "no such file");
-      // The checksum identifies the model in every output file (the effective scene records it); a
-      // scene that pins one refuses a model file that has changed since.
-      const std::string sum = file_checksum_fnv1a(f.drag_model_path);
+      // The model is read here, once (its checksum with it); load_scene checks it against the scene's
+      // physical system once the derived numbers are known. The checksum identifies the model in every
+      // output file (the effective scene records it); a scene that pins one refuses a model file that has
+      // changed since.
+      auto model = std::make_shared<const DragModel>(load_drag_model(f.drag_model_path));
+      const std::string sum = model->checksum;
       if (!f.drag_model_checksum.empty() && f.drag_model_checksum != sum)
         in.fail_value("fluid", "drag_model_checksum",
                       "differs from the checksum of " + f.drag_model_path + " (" + sum +
                           "): the model file has changed since this scene recorded it");
       f.drag_model_checksum = sum;
+      f.drag_model = std::move(model);
     }
     const bool has_cells = in.has("fluid", "cells"), has_dx = in.has("fluid", "dx_over_dp");
     if (auto cells = in.ivec3("fluid", "cells")) {
@@ -517,6 +522,7 @@ Scene load_scene_from_string(const std::string& toml_text, const std::string& or
   Scene scene = build_scene(reader, accepts);
   scene.name = std::filesystem::path(origin).stem().string();
   scene.source_path = origin;
+  if (scene.fluid && scene.fluid->drag_model) check_model_matches_scene(*scene.fluid->drag_model, scene);
   if (scene.fluid && !scene.fluid->drag_model_checksum.empty())  // record the model file's checksum
     root["fluid"].as_table()->insert_or_assign("drag_model_checksum", scene.fluid->drag_model_checksum);
   scene.effective_toml = emit_scene(root);

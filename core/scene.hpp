@@ -4,6 +4,7 @@
 // SI units everywhere; the unit is in the name or the comment of every field.
 #include <array>
 #include <cstdint>
+#include <memory>
 #include <optional>
 #include <string>
 #include <vector>
@@ -43,6 +44,7 @@ struct ContactConfig {
 };
 
 enum class Coupling { Quiescent, OneWay, TwoWay };
+struct DragModel;  // a drag model file as read (core/filtered_drag.hpp)
 
 struct FluidConfig {
   double density_kg_m3 = 1.3;
@@ -55,6 +57,9 @@ struct FluidConfig {
   bool parcel_correction = true;      // filtered laws: c_corr(alpha) on (false: c_corr = 1, for the parcel fit)
   std::string drag_model_path;        // fluid.drag_model: model file of drag = "model" (cgd-fit), as given
   std::string drag_model_checksum;    // its FNV-1a checksum (16 hex digits), recorded in the effective scene
+  // drag = "model": the file, read once by load_scene and checked there against the scene's physical
+  // system (check_model_matches_scene); the engine uses it as it is (filtered_drag_setup reads nothing)
+  std::shared_ptr<const DragModel> drag_model;
 };
 
 struct RunConfig {

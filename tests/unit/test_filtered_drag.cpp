@@ -468,15 +468,22 @@ TEST(FilteredDragEngine, HomogeneousSuspensionMatchesFilteredBalance) {
   }
 }
 
-// A model made for other particles is refused before anything is written.
+// A model made for other particles is refused when the scene is loaded (the model is read and checked
+// there, once, before any engine exists), so nothing is written.
 TEST(FilteredDragEngine, RunRefusesAModelOfAnotherSystem) {
   TempDir dir;
   const std::string path = (dir / "model.h5").string();
   write_model(path, line_model(), 100e-6);
-  const cgd::Scene scene = scene_with({"fluid.drag=\"model\"", "fluid.drag_model=\"" + path + "\""});
-  TempDir run_dir;
-  expect_input_error([&] { run_quietly(scene, run_dir); }, {"particles.diameter", path});
-  EXPECT_FALSE(fs::exists(run_dir / "run"));
+  expect_input_error([&] { scene_with({"fluid.drag=\"model\"", "fluid.drag_model=\"" + path + "\""}); },
+                     {"particles.diameter", path, "filtered_test.toml"});
+  // the scene that loads carries the model as read: the engine's setup reads nothing
+  const std::string good = (dir / "good.h5").string();
+  write_model(good, line_model());
+  const cgd::Scene scene = scene_with({"fluid.drag=\"model\"", "fluid.drag_model=\"" + good + "\""});
+  ASSERT_TRUE(scene.fluid->drag_model);
+  fs::remove(good);
+  const cgd::FilteredDragSetup setup = cgd::filtered_drag_setup(scene, {3 * 75e-6, 3 * 75e-6, 3 * 75e-6});
+  EXPECT_EQ(setup.model.get(), scene.fluid->drag_model.get());
 }
 
 }  // namespace
