@@ -24,6 +24,8 @@
 #include "sim/coupled_step.hpp"
 #include "sim/dem/placement.hpp"
 #include "sim/progress.hpp"
+#include "sim/run_checkpoint.hpp"
+#include "sim/run_report.hpp"
 #include "sim/fluid/grid.hpp"
 
 namespace fs = std::filesystem;
@@ -53,7 +55,6 @@ void write_text_atomically(const fs::path& path, const std::string& text) {
   fs::rename(tmp, path);
 }
 
-constexpr double kMiB = 1024.0 * 1024.0;
 
 /// The peak resident set size of this process so far (getrusage), summed over the ranks. Collective.
 double peak_memory_bytes(MPI_Comm comm) {
@@ -434,135 +435,48 @@ class RunDriver {
     series_.write((dir_ / "series.h5").string(), comm_, scene_);
   }
 
-  // ---- checkpoint (layout: core/checkpoint.hpp) -------------------------------------------------
+  // ---- checkpoint (sim/run_checkpoint.hpp; layout: core/checkpoint.hpp) --------------------------
+  /// The run's book-keeping as the checkpoint keeps it, the same on every rank (rank 0's clock). Collective.
+  RunBook book() const {
+    RunBook b;
+    b.wall_seconds = elapsed();
+    MPI_Bcast(&b.wall_seconds, 1, MPI_DOUBLE, 0, comm_);
+    b.phase_seconds = phase_seconds();
+    MPI_Bcast(b.phase_seconds.data(), static_cast<int>(b.phase_seconds.size()), MPI_DOUBLE, 0, comm_);
+    b.frames = frames_;
+    b.placement_method = placement_method_;
+    return b;
+  }
+
   void write_checkpoint() {
     ScopedPhase t(run_timers_, t_checkpoint_);
-    const dem::Particles& p = dem_.particles();
-    const dem::ContactStore store = dem_.contact_store();
-    const std::int64_t n = static_cast<std::int64_t>(p.n_owned);
-    std::vector<std::int64_t> per_particle(static_cast<std::size_t>(n), 0);
-    if (store.offset.size() == p.n_owned + 1)
-      for (std::int64_t i = 0; i < n; ++i) per_particle[i] = store.offset[i + 1] - store.offset[i];
-    checkpoint::RunState state;
-    state.step = dem_.step_index();
-    state.time_s = static_cast<double>(dem_.step_index()) * dt_;
-    state.displacement_bound_m = dem_.displacement_bound();
-    state.rebuild_due = dem_.rebuild_due();
-    state.last_sort_step = dem_.last_sort_step();
-    state.neighbor_rebuilds = dem_.rebuilds();
-    state.wall_seconds = elapsed();
-    MPI_Bcast(&state.wall_seconds, 1, MPI_DOUBLE, 0, comm_);
-    state.phase_seconds = phase_seconds();
-    MPI_Bcast(state.phase_seconds.data(), static_cast<int>(state.phase_seconds.size()), MPI_DOUBLE, 0, comm_);
-    state.frames = frames_;
-    state.placement_method = placement_method_;
-    checkpoint::ParticleRows rows;
-    rows.count = n;
-    rows.id = p.id.data();
-    rows.position = p.x.data();  // unwrapped, as in memory
-    rows.velocity = p.v.data();  // leapfrog v_{n-1/2}
-    rows.angular_velocity = p.rotation ? p.w.data() : nullptr;
-    rows.contact_count = per_particle.data();
-    rows.contact_rows = static_cast<std::int64_t>(store.partner.size());
-    rows.partner = store.partner.data();
-    rows.spring = store.xi.data();
-    checkpoint::FluidRows fluid_rows;
-    if (coupled_) fluid_rows = coupled_->checkpoint_rows();
+    const RunBook b = book();
     // The series first: a kill between the two leaves a series that reaches past the older checkpoint
     // (a restart cuts it back), never one that stops short of the newer checkpoint (a gap of rows).
     write_series();
-    checkpoint::write((dir_ / "checkpoint.h5").string(), comm_, scene_, state, rows, coupled_ ? &fluid_rows : nullptr);
+    write_run_checkpoint((dir_ / "checkpoint.h5").string(), comm_, scene_, dem_, dt_, coupled_.get(), b);
     last_checkpoint_wall_ = wall_seconds();
   }
 
   void load_checkpoint() {
-    const std::string path = (dir_ / "checkpoint.h5").string();
-    checkpoint::Reader file(path, comm_);
-    const checkpoint::RunState& state = file.state();
-    const std::int64_t step = state.step;
-    if (step > end_step_)
-      throw InputError(scene_.source_path + ": run.end_time = " + std::to_string(scene_.run.end_time_s) +
-                       " s is before the checkpoint's time " + std::to_string(static_cast<double>(step) * dt_) +
-                       " s (" + path + "): a restart can only continue a run; give an end time at or after it");
-    const std::vector<std::int64_t>& counts = file.rank_particle_counts();
-    const std::vector<std::int64_t>& ccounts = file.rank_contact_counts();
-    const bool rotation = dem_.particles().rotation;
-    if (rotation != file.has_angular_velocity())
-      throw InputError(path + ": the checkpoint was written with friction " +
-                       std::string(rotation ? "off" : "on") + ", the scene now has it " + (rotation ? "on" : "off"));
-    std::int64_t total = 0, total_c = 0;
-    for (auto c : counts) total += c;
-    for (auto c : ccounts) total_c += c;
-    if (total != scene_.derived.particle_count)
-      throw InputError(path + ": holds " + std::to_string(total) + " particles, the scene calls for " +
-                       std::to_string(scene_.derived.particle_count) + " (the scene changed since the checkpoint)");
-    std::int64_t first = 0, count = total, cfirst = 0, ccount = total_c;
-    const bool same_layout = file.ranks() == ranks_;
-    if (same_layout) {
-      first = cfirst = 0;
-      for (int r = 0; r < rank_; ++r) {
-        first += counts[r];
-        cfirst += ccounts[r];
-      }
-      count = counts[rank_];
-      ccount = ccounts[rank_];
-    }
-    checkpoint::ParticleData d = file.particles(first, count, cfirst, ccount, rotation);
-    dem::ContactStore store;
-    store.offset.assign(1, 0);
-    if (same_layout) {
-      for (std::int64_t i = 0; i < count; ++i) store.offset.push_back(store.offset.back() + d.contact_count[i]);
-      store.partner = std::move(d.partner);
-      store.xi = std::move(d.spring);
-    } else {
-      // Different rank count: keep the particles this rank owns (by wrapped height).
-      std::vector<std::int64_t> kid;
-      std::vector<double> kx, kv, kw;
-      std::int64_t c0 = 0;
-      for (std::int64_t i = 0; i < count; ++i) {
-        double q[3] = {d.position[3 * i], d.position[3 * i + 1], d.position[3 * i + 2]};
-        dem_.slabs().wrap(q);
-        const std::int64_t c1 = c0 + d.contact_count[i];
-        if (dem_.slabs().owner(q[1]) == rank_) {
-          kid.push_back(d.id[i]);
-          kx.insert(kx.end(), q, q + 3);
-          kv.insert(kv.end(), &d.velocity[3 * i], &d.velocity[3 * i + 3]);
-          if (rotation) kw.insert(kw.end(), &d.angular_velocity[3 * i], &d.angular_velocity[3 * i + 3]);
-          for (std::int64_t k = c0; k < c1; ++k) {
-            store.partner.push_back(d.partner[k]);
-            store.xi.insert(store.xi.end(), &d.spring[3 * k], &d.spring[3 * k + 3]);
-          }
-          store.offset.push_back(static_cast<std::int64_t>(store.partner.size()));
-        }
-        c0 = c1;
-      }
-      d.id = std::move(kid);
-      d.position = std::move(kx);
-      d.velocity = std::move(kv);
-      d.angular_velocity = std::move(kw);
-    }
-    dem_.set_particles(std::move(d.id), std::move(d.position), std::move(d.velocity), std::move(d.angular_velocity));
-    dem_.restore(std::move(store), state.displacement_bound_m, !same_layout || state.rebuild_due, step,
-                 state.last_sort_step);
-    wall_offset_ = state.wall_seconds;
-    const std::vector<double>& phases = state.phase_seconds;
+    const RestoredRun r = load_run_checkpoint((dir_ / "checkpoint.h5").string(), comm_, scene_, dem_, dt_, end_step_,
+                                              coupled_.get());
+    wall_offset_ = r.book.wall_seconds;
+    const std::vector<double>& phases = r.book.phase_seconds;
     const std::size_t nd = dem_.timers().names().size();
     dem_.timers().set_all_seconds(std::vector<double>(phases.begin(), phases.begin() + std::min(nd, phases.size())));
     if (phases.size() > nd) run_timers_.set_all_seconds(std::vector<double>(phases.begin() + nd, phases.end()));
-    frames_ = state.frames;
-    placement_method_ = state.placement_method;
-    dem_.set_rebuilds(state.neighbor_rebuilds);
-    if (coupled_) coupled_->restore(file);
-    file.close();
+    frames_ = r.book.frames;
+    placement_method_ = r.book.placement_method;
     const fs::path series_path = dir_ / "series.h5";
     if (fs::exists(series_path)) {
       series_ = schema::Series::read(series_path.string(), comm_);
-      series_.truncate_after((static_cast<double>(step) - 0.5) * dt_);
+      series_.truncate_after((static_cast<double>(r.step) - 0.5) * dt_);
       overlap_warned_ = !series_.warnings().empty();  // warned once per run, restarts included
     } else {
       declare_series();
     }
-    restarted_from_ = step;
+    restarted_from_ = r.step;
   }
 
   // ---- loop ---------------------------------------------------------------------------------------
@@ -585,57 +499,34 @@ class RunDriver {
                              per_particle * static_cast<double>(scene_.derived.particle_count) + kPerCell * cells;
   }
 
-  /// What the run is and will do (stdout, rank 0, not with --quiet): the tool, the scene's table
-  /// (describe_scene: the scene line, effects, derived numbers), then what the engine decides.
+  /// What the run is and will do (stdout, rank 0, not with --quiet): sim/run_report.hpp's banner.
   void print_banner() {
     if (settings_.quiet) return;
     // Collective: the fluid's current step limit (u = 0 at a fresh start).
     const double fluid_limit_now = coupled_ ? coupled_->max_fluid_dt() : 0.0;
     if (rank_ != 0) return;
-    std::ostringstream o;
-    o.precision(4);
-    o << settings_.tool << " " << CGD_VERSION << "\n";
-    // The scene's table with the engine's memory estimate (the scene alone cannot know what the libraries,
-    // the placement and the solvers take): one memory row, the one compared with the measured peak at the end.
-    Scene shown = scene_;
-    shown.derived.memory_estimate_bytes = memory_estimate_bytes_;
-    o << describe_scene(shown);
-    o << "run\n";
-    o << "  MPI ranks                 " << ranks_ << " (slabs along y)\n";
-    if (restarted_from_ >= 0) o << "  restart                   from the checkpoint at step " << restarted_from_ << "\n";
-    else
-      o << "  placement                 " << placement_method_ << ", smallest gap " << placement_gap_ << " d, "
-        << placement_seconds_ << " s\n";
-    o << "  DEM steps                 " << end_step_ << " of " << dt_ << " s";
-    if (restarted_from_ >= 0) o << " (" << end_step_ - restarted_from_ << " to do)";
-    o << "\n";
+    RunBanner b;
+    b.tool = settings_.tool;
+    b.scene = &scene_;
+    b.memory_estimate_bytes = memory_estimate_bytes_;
+    b.resident_at_start_bytes = resident_at_start_;
+    b.ranks = ranks_;
+    b.restarted_from = restarted_from_;
+    b.placement_method = placement_method_;
+    b.placement_gap = placement_gap_;
+    b.placement_seconds = placement_seconds_;
+    b.end_step = end_step_;
+    b.dump_every = dump_every_;
+    b.series_every = series_every_;
+    b.dt_s = dt_;
+    b.coupled = coupled_ != nullptr;
     if (coupled_) {
-      const std::string indent(28, ' ');
-      o << "  fluid step                adaptive, CFL-limited: Co dx / max|u| (Co = " << scene_.fluid->courant
-        << "), at most the drag limit " << coupled_->drag_dt_cap() << " s (dt beta_max/rho_p <= "
-        << scene_.numerics.drag_safety << ")\n"
-        << indent << "and the viscous limit " << coupled_->fluid().viscous_dt_limit()
-        << " s; a whole number of DEM steps, evened out to land on the snapshot times.\n"
-        << indent << "The first step is at most " << fluid_limit_now << " s (the flow now); dt_fluid above is the Courant "
-        << "step at u = u_t only.\n"
-        << indent << "It shrinks as clusters speed the flow up: series.h5 column dt_fluid, progress column dt_fluid_s\n";
+      b.drag_dt_cap_s = coupled_->drag_dt_cap();
+      b.viscous_dt_limit_s = coupled_->fluid().viscous_dt_limit();
+      b.fluid_limit_now_s = fluid_limit_now;
     }
-    o << "  snapshots                 ";
-    if (dump_every_ > 0) o << "every " << dump_every_ << " DEM steps (" << static_cast<double>(dump_every_) * dt_ << " s)";
-    else o << "the initial and final states only";
-    o << "\n  series.h5                 ";
-    if (coupled_) {
-      o << "a row every fluid step";
-      if (scene_.run.series_interval_s > 0) o << " (run.series_interval applies to runs without a solved fluid)";
-    } else {
-      o << "a row every " << series_every_ << " DEM steps (" << static_cast<double>(series_every_) * dt_ << " s)";
-    }
-    o << "; rewritten at each snapshot and checkpoint\n";
-    o << "  memory                    " << resident_at_start_ / kMiB << " MiB resident after setup + "
-      << (memory_estimate_bytes_ - resident_at_start_) / kMiB
-      << " MiB to come (neighbour lists, coupling fields, output buffers) = the estimate above\n";
-    o << "  output                    " << dir_.string() << "\n";
-    std::cout << o.str() << std::flush;
+    b.output_dir = dir_.string();
+    std::cout << run_banner(b) << std::flush;
   }
 
   /// A progress line when due (rank 0; sim/progress.hpp), with the physics of the latest series row.
@@ -794,64 +685,39 @@ class RunDriver {
     }
   }
 
+  /// The series, the timing report (sim/run_report.hpp; max over ranks per phase, for this session and
+  /// for the whole run) and the DONE marker, written last. Collective.
   void finish() {
     write_series();
-    // timing table: max over ranks per phase, for this session and for the whole run (all sessions)
     const std::vector<double> phases = phase_seconds();
     std::vector<double> session(phases.size());
     for (std::size_t k = 0; k < phases.size(); ++k) session[k] = phases[k] - session_start_phases_[k];
-    std::vector<double> max_phases(phases.size()), max_session(phases.size());
-    MPI_Allreduce(phases.data(), max_phases.data(), static_cast<int>(phases.size()), MPI_DOUBLE, MPI_MAX, comm_);
-    MPI_Allreduce(session.data(), max_session.data(), static_cast<int>(session.size()), MPI_DOUBLE, MPI_MAX, comm_);
-    const double wall = elapsed(), session_wall = wall_seconds() - wall_start_;
+    RunReport r;
+    r.whole_run_phase_seconds.resize(phases.size());
+    r.session_phase_seconds.resize(phases.size());
+    MPI_Allreduce(phases.data(), r.whole_run_phase_seconds.data(), static_cast<int>(phases.size()), MPI_DOUBLE, MPI_MAX,
+                  comm_);
+    MPI_Allreduce(session.data(), r.session_phase_seconds.data(), static_cast<int>(session.size()), MPI_DOUBLE, MPI_MAX,
+                  comm_);
+    const double wall = elapsed();
+    r.wall_s = wall;
+    r.session_wall_s = wall_seconds() - wall_start_;
     std::int64_t n_local = static_cast<std::int64_t>(dem_.particles().n_owned), n = 0;
     MPI_Allreduce(&n_local, &n, 1, MPI_INT64_T, MPI_SUM, comm_);
     double bytes = static_cast<double>(dem_.bytes()), total_bytes = 0;
     MPI_Allreduce(&bytes, &total_bytes, 1, MPI_DOUBLE, MPI_SUM, comm_);
-    const double peak = peak_memory_bytes(comm_);
+    r.peak_bytes = peak_memory_bytes(comm_);
     if (rank_ == 0) {
-      const double steps = static_cast<double>(end_step_ - loop_start_step_);
-      const double loop_wall = wall_seconds() - loop_start_wall_;
-      const bool restarted = restarted_from_ >= 0;
-      std::ostringstream o;
-      char line[256];
-      o << "\ntiming (wall seconds, slowest rank)";
-      if (restarted)
-        o << ": this session (steps " << loop_start_step_ << " to " << end_step_ << ", restarted from the checkpoint) "
-          << "and the whole run (all sessions, from step 0)\n";
-      else
-        o << ": the whole run (steps 0 to " << end_step_ << ")\n";
-      if (restarted)
-        std::snprintf(line, sizeof line, "  %-18s %12s  %12s  %7s\n", "phase", "this session", "whole run", "of run");
-      else
-        std::snprintf(line, sizeof line, "  %-18s %12s  %7s\n", "phase", "seconds", "of run");
-      o << line;
-      const std::vector<std::string> names = phase_names();
-      for (std::size_t k = 0; k < names.size(); ++k) {
-        if (restarted)
-          std::snprintf(line, sizeof line, "  %-18s %10.3f s  %10.3f s  %5.1f %%\n", names[k].c_str(), max_session[k],
-                        max_phases[k], 100.0 * max_phases[k] / std::max(wall, 1e-12));
-        else
-          std::snprintf(line, sizeof line, "  %-18s %10.3f s  %5.1f %%\n", names[k].c_str(), max_phases[k],
-                        100.0 * max_phases[k] / std::max(wall, 1e-12));
-        o << line;
-      }
-      if (restarted) std::snprintf(line, sizeof line, "  %-18s %10.3f s  %10.3f s\n", "total", session_wall, wall);
-      else std::snprintf(line, sizeof line, "  %-18s %10.3f s\n", "total", wall);
-      o << line;
-      std::snprintf(line, sizeof line, "  particle-steps per second per core%s: %.3e (%.0f steps in %.3f s)\n",
-                    restarted ? " (this session)" : "",
-                    static_cast<double>(n) * steps / std::max(loop_wall, 1e-12) / ranks_, steps, loop_wall);
-      o << line;
-      std::snprintf(line, sizeof line, "  DEM memory: %.0f bytes per particle (%.1f MiB)\n",
-                    total_bytes / std::max<double>(1, static_cast<double>(n)), total_bytes / kMiB);
-      o << line;
-      std::snprintf(line, sizeof line,
-                    "  memory (all ranks): estimated %.1f MiB, measured peak %.1f MiB (this session's peak resident "
-                    "set, getrusage)\n",
-                    memory_estimate_bytes_ / kMiB, peak / kMiB);
-      o << line;
-      std::cout << o.str() << std::flush;
+      r.phase_names = phase_names();
+      r.loop_wall_s = wall_seconds() - loop_start_wall_;
+      r.end_step = end_step_;
+      r.loop_start_step = loop_start_step_;
+      r.restarted = restarted_from_ >= 0;
+      r.particles = n;
+      r.ranks = ranks_;
+      r.dem_bytes = total_bytes;
+      r.memory_estimate_bytes = memory_estimate_bytes_;
+      std::cout << timing_report(r) << std::flush;
     }
     std::ostringstream done;
     done << "completed " << end_step_ << " steps, t = " << static_cast<double>(end_step_) * dt_ << " s, " << n
