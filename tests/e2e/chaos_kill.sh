@@ -25,40 +25,14 @@ kill_run() {  # SIGKILL mpirun and every process of its session (the ranks have 
 }
 trap 'kill_run; [ -n "${KEEP:-}" ] || rm -rf "$tmp"' EXIT
 
-# the coupled scene of coupled_restart.sh, 0.2 s: 16 x 24 x 16 d_p, 5 x 7 x 5 cells (2 ranks: 4 + 3 rows),
-# 1,408 particles, ~78,000 DEM steps, a snapshot every 0.02 s
-cat > "$tmp/chaos.toml" <<'TOML'
-[domain]
-size_dp = [16, 24, 16]
-gravity = [0.0, -9.81, 0.0]
-[particles]
-diameter = 75e-6
-density = 1500.0
-solids_fraction = 0.12
-velocity_rms = 0.03
-seed = 3
-[contact]
-model = "spring-dashpot"
-stiffness = 0.1
-t_star = 0.02
-restitution = 0.9
-friction = 0.1
-[fluid]
-density = 1.3
-viscosity = 1.8e-5
-dx_over_dp = 3.33
-courant = 0.3
-coupling = "two-way"
-drag = "beetstra"
-[run]
-end_time = 0.2
-dump_interval = 0.02
-checkpoint_wall_s = 0.2
-TOML
-SCENE=$tmp/chaos.toml
+# the coupled scene of coupled_restart.sh (tests/scenes/small_suspension.toml), 0.2 s: 16 x 24 x 16 d_p,
+# 5 x 7 x 5 cells (2 ranks: 4 + 3 rows), 1,408 particles, ~78,000 DEM steps, a snapshot every 0.02 s; every
+# invocation, the restarts included, gives the same --set (a restart refuses a scene that differs)
+SCENE=${CGD_SOURCE_DIR:?}/tests/scenes/small_suspension.toml
+sets=(--set run.end_time=0.2 --set run.dump_interval=0.02)
 run=$tmp/chaos
 
-timeout 300 $MPIEXEC --allow-run-as-root --oversubscribe -np 2 "$BIN" "$SCENE" --quiet -o "$tmp/ref" > /dev/null
+timeout 300 $MPIEXEC --allow-run-as-root --oversubscribe -np 2 "$BIN" "$SCENE" "${sets[@]}" --quiet -o "$tmp/ref" > /dev/null
 
 # a file's identity: checkpoint.h5 and series.h5 are written under a temporary name and renamed into
 # place, so each new version has a new inode (mtimes can coincide within the clock's resolution)
@@ -73,7 +47,7 @@ for cycle in $(seq 1 20); do
   ckpt0=$(mtime "$run/checkpoint.h5") series0=$(mtime "$run/series.h5")
   # checkpoints every 0.02 s of wall time while being killed: each cycle advances the run by little, so 20
   # cycles stay well inside the run on a fast machine too (the interval may change on restart)
-  setsid $MPIEXEC --allow-run-as-root --oversubscribe -np 2 "$BIN" "$SCENE" --quiet "${restart[@]}" \
+  setsid $MPIEXEC --allow-run-as-root --oversubscribe -np 2 "$BIN" "$SCENE" "${sets[@]}" --quiet "${restart[@]}" \
     --set run.checkpoint_wall_s=0.02 -o "$run" > "$tmp/cycle$cycle.log" 2>&1 &
   pid=$!
   mode=$((RANDOM % 3))
@@ -96,7 +70,7 @@ for cycle in $(seq 1 20); do
   [ ! -f "$run/DONE" ] || { echo "FAIL: cycle $cycle: DONE written before the run completed"; exit 1; }
 done
 # one more restart runs to the end
-timeout 300 $MPIEXEC --allow-run-as-root --oversubscribe -np 2 "$BIN" "$SCENE" --quiet --restart -o "$run" > "$tmp/final.log" 2>&1 ||
+timeout 300 $MPIEXEC --allow-run-as-root --oversubscribe -np 2 "$BIN" "$SCENE" "${sets[@]}" --quiet --restart -o "$run" > "$tmp/final.log" 2>&1 ||
   { echo "FAIL: the final restart failed"; cat "$tmp/final.log"; exit 1; }
 echo "killed $kills times (during a write: ${modes[0]}, after a checkpoint: ${modes[1]}, at a random delay: ${modes[2]}; fresh starts without a checkpoint: $fresh)"
 

@@ -13,38 +13,10 @@ PY=/usr/bin/python3
 tmp=$(mktemp -d)
 trap '[ -n "${KEEP:-}" ] || rm -rf "$tmp"' EXIT  # KEEP=1 keeps the run directories for inspection
 
-# a small suspension: 16 x 24 x 16 d_p, 5 x 7 x 5 cells, 1,408 particles with random initial velocities
-# (collisions and friction exercise the contact history), ~710 fluid steps and 46,900 DEM steps (~3 s),
-# a snapshot every 0.015 s; the kill lands about half-way
-cat > "$tmp/coupled.toml" <<'EOF'
-[domain]
-size_dp = [16, 24, 16]
-gravity = [0.0, -9.81, 0.0]
-[particles]
-diameter = 75e-6
-density = 1500.0
-solids_fraction = 0.12
-velocity_rms = 0.03
-seed = 3
-[contact]
-model = "spring-dashpot"
-stiffness = 0.1
-t_star = 0.02
-restitution = 0.9
-friction = 0.1
-[fluid]
-density = 1.3
-viscosity = 1.8e-5
-dx_over_dp = 3.33
-courant = 0.3
-coupling = "two-way"
-drag = "beetstra"
-pressure_gradient_force = true
-[run]
-end_time = 0.12
-dump_interval = 0.015
-EOF
-SCENE=$tmp/coupled.toml
+# a small suspension (tests/scenes/small_suspension.toml): 16 x 24 x 16 d_p, 5 x 7 x 5 cells, 1,408 particles
+# with random initial velocities (collisions and friction exercise the contact history), ~710 fluid steps and
+# 46,900 DEM steps (~3 s), a snapshot every 0.015 s; the kill lands about half-way
+SCENE=${CGD_SOURCE_DIR:?}/tests/scenes/small_suspension.toml
 common=(--quiet)
 
 "$BIN" "$SCENE" "${common[@]}" -o "$tmp/a" > "$tmp/a.log"

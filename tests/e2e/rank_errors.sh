@@ -19,35 +19,15 @@ trap '[ -n "${KEEP:-}" ] || rm -rf "$tmp"' EXIT
 export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 OMPI_MCA_rmaps_base_oversubscribe=1
 failures=0
 
+# tests/scenes/small_suspension.toml made small: <phi> = 0.05 from rest, 0.001 s, no snapshots but the ends
+SCENE=${CGD_SOURCE_DIR:?}/tests/scenes/small_suspension.toml
+small=(--set particles.solids_fraction=0.05 --set particles.velocity_rms=0 --set run.end_time=0.001
+       --set run.dump_interval=0)
 # 4 x 4 x 4 d_p with cells of d_p/2: 8 y-rows, FFTW blocks 3 + 3 + 2 on 3 ranks; the 2-row slab (1 d_p) is
 # below the contact cutoff (1.15 d_p), the 3-row ones are not
-cat > "$tmp/thin.toml" <<'TOML'
-[domain]
-size_dp = [4, 4, 4]
-gravity = [0.0, -9.81, 0.0]
-[particles]
-diameter = 75e-6
-density = 1500.0
-solids_fraction = 0.05
-seed = 3
-[contact]
-model = "spring-dashpot"
-stiffness = 0.1
-t_star = 0.02
-restitution = 0.9
-friction = 0.1
-[fluid]
-density = 1.3
-viscosity = 1.8e-5
-dx_over_dp = 0.5
-courant = 0.3
-coupling = "two-way"
-drag = "beetstra"
-[run]
-end_time = 0.001
-TOML
+thin=("$SCENE" "${small[@]}" --set 'domain.size_dp=[4,4,4]' --set fluid.dx_over_dp=0.5)
 # 8 x 12 x 8 d_p, cells of d_p: 12 rows, 4 + 4 + 4 (3 ranks); runs of 400 DEM steps
-sed 's/dx_over_dp = 0.5/dx_over_dp = 1.0/; s/size_dp = \[4, 4, 4\]/size_dp = [8, 12, 8]/' "$tmp/thin.toml" > "$tmp/ok.toml"
+ok=("$SCENE" "${small[@]}" --set 'domain.size_dp=[8,12,8]' --set fluid.dx_over_dp=1.0)
 
 # expect NAME STATUS SUBSTRING... -- ARGS: mpirun -np 3 cgd-generate ARGS must exit with STATUS within 30 s
 # (the 120 s timeout turns a hang into a failure) and print every SUBSTRING on stderr
@@ -67,18 +47,18 @@ expect() {
   else sed 's/^/     /' "$tmp/$name.err" | head -20; failures=$((failures + 1)); fi
 }
 
-expect thin-slab 2 "too many MPI ranks" "thinnest" -- "$BIN" "$tmp/thin.toml" --quiet -o "$tmp/thin"
+expect thin-slab 2 "too many MPI ranks" "thinnest" -- "$BIN" "${thin[@]}" --quiet -o "$tmp/thin"
 [ ! -e "$tmp/thin" ] || { echo "FAIL thin-slab: $tmp/thin was created"; failures=$((failures + 1)); }
 
-"$BIN" "$tmp/ok.toml" --quiet -o "$tmp/run" > /dev/null
+"$BIN" "${ok[@]}" --quiet -o "$tmp/run" > /dev/null
 cp -r "$tmp/run" "$tmp/run2"
 mkdir "$tmp/run/scene.toml.tmp"  # rank 0 cannot write scene.toml
 expect rank0-file-operation 1 "scene.toml.tmp: cannot write" "(on rank 0)" -- \
-  "$BIN" "$tmp/ok.toml" --restart --set run.end_time=0.002 --quiet -o "$tmp/run"
+  "$BIN" "${ok[@]}" --restart --set run.end_time=0.002 --quiet -o "$tmp/run"
 head -c 3000 "$tmp/run2/checkpoint.h5" > "$tmp/cut" && mv "$tmp/cut" "$tmp/run2/checkpoint.h5"  # truncated
-expect unreadable-checkpoint 2 "checkpoint.h5" -- "$BIN" "$tmp/ok.toml" --restart --set run.end_time=0.002 --quiet -o "$tmp/run2"
+expect unreadable-checkpoint 2 "checkpoint.h5" -- "$BIN" "${ok[@]}" --restart --set run.end_time=0.002 --quiet -o "$tmp/run2"
 expect one-rank-only 1 "rank 2 of 3" "failure injected on rank 2" "aborting the job" -- \
-  -x CGD_TEST_FAIL_ON_RANK=2 "$BIN" "$tmp/ok.toml" --quiet -o "$tmp/run3"
+  -x CGD_TEST_FAIL_ON_RANK=2 "$BIN" "${ok[@]}" --quiet -o "$tmp/run3"
 
 [ $failures -eq 0 ] || { echo "$failures check(s) failed"; exit 1; }
 echo "errors on some ranks end the run within seconds: passed"

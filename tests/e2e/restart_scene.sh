@@ -18,41 +18,18 @@ tmp=$(mktemp -d)
 trap '[ -n "${KEEP:-}" ] || rm -rf "$tmp"' EXIT
 export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 OMPI_MCA_rmaps_base_oversubscribe=1
 
-# a small coupled suspension: 16 x 32 x 16 d_p, 5 x 10 x 5 cells, soft contacts (dt_DEM 2.5 us), 4,000 steps
-cat > "$tmp/small.toml" <<'TOML'
-[domain]
-size_dp = [16, 32, 16]
-gravity = [0.0, -9.81, 0.0]
-[particles]
-diameter = 75e-6
-density = 1500.0
-solids_fraction = 0.05
-velocity_rms = 0.02
-seed = 3
-[contact]
-model = "spring-dashpot"
-stiffness = 0.1
-t_star = 0.02
-restitution = 0.9
-friction = 0.1
-[fluid]
-density = 1.3
-viscosity = 1.8e-5
-cells = [5, 10, 5]
-courant = 0.3
-coupling = "two-way"
-drag = "beetstra"
-[run]
-end_time = 0.01
-dump_interval = 0.005
-TOML
-scene=$tmp/small.toml
+# a small coupled suspension, tests/scenes/small_suspension.toml with 16 x 32 x 16 d_p, 5 x 10 x 5 cells,
+# <phi> = 0.05, soft contacts (dt_DEM 2.5 us), 4,000 steps; every invocation gives these --set first (a
+# restart refuses a scene that differs), and the checks' own --set after them
+scene=("${CGD_SOURCE_DIR:?}/tests/scenes/small_suspension.toml" --set 'domain.size_dp=[16,32,16]'
+       --set particles.solids_fraction=0.05 --set particles.velocity_rms=0.02 --set 'fluid.cells=[5,10,5]'
+       --set run.end_time=0.01 --set run.dump_interval=0.005)
 run=$tmp/run
 failures=0
 fail() { echo "FAIL $*"; failures=$((failures + 1)); }
 state() { (cd "$run" && find . -type f | sort | xargs sha256sum); }
 
-timeout 120 "$BIN" "$scene" --quiet -o "$run" > "$tmp/first.log"
+timeout 120 "$BIN" "${scene[@]}" --quiet -o "$run" > "$tmp/first.log"
 [ -f "$run/DONE" ] || { echo "FAIL: the first run did not complete"; exit 1; }
 state > "$tmp/state0"
 
@@ -73,17 +50,17 @@ expect_refused() {
 }
 
 expect_refused restitution "contact.restitution = 0.9 in the checkpoint, 0.5 now" -- \
-  "$scene" --restart -o "$run" --set contact.restitution=0.5 --set run.end_time=0.02
+  "${scene[@]}" --restart -o "$run" --set contact.restitution=0.5 --set run.end_time=0.02
 expect_refused grid "fluid.cells = [5, 10, 5] in the checkpoint, [5, 12, 5] now" -- \
-  "$scene" --restart -o "$run" --set 'fluid.cells=[5,12,5]' --set run.end_time=0.02
+  "${scene[@]}" --restart -o "$run" --set 'fluid.cells=[5,12,5]' --set run.end_time=0.02
 expect_refused two-keys "2 key(s)" "contact.friction" "particles.seed" -- \
-  "$scene" --restart -o "$run" --set contact.friction=0.2 --set particles.seed=4
-expect_refused completed-with-set "contact.friction" -- "$scene" --restart -o "$run" --set contact.friction=0.2
-expect_refused end-before-checkpoint "before the checkpoint's time" -- "$scene" --restart -o "$run" --set run.end_time=0.005
+  "${scene[@]}" --restart -o "$run" --set contact.friction=0.2 --set particles.seed=4
+expect_refused completed-with-set "contact.friction" -- "${scene[@]}" --restart -o "$run" --set contact.friction=0.2
+expect_refused end-before-checkpoint "before the checkpoint's time" -- "${scene[@]}" --restart -o "$run" --set run.end_time=0.005
 
 # a completed run restarted with only an output interval changed: nothing to do, nothing written
 status=0
-timeout 120 "$BIN" "$scene" --restart -o "$run" --set run.dump_interval=0.0025 --quiet > "$tmp/noop.out" 2>&1 || status=$?
+timeout 120 "$BIN" "${scene[@]}" --restart -o "$run" --set run.dump_interval=0.0025 --quiet > "$tmp/noop.out" 2>&1 || status=$?
 if [ $status -eq 0 ] && grep -q "already complete" "$tmp/noop.out" && state | cmp -s - "$tmp/state0"; then
   echo "ok   completed-run: $(head -n 1 "$tmp/noop.out")"
 else
@@ -97,7 +74,7 @@ timeout 120 "$BIN" --restart -o "$run" --set run.end_time=0.015 --quiet > "$tmp/
 [ $status -eq 0 ] || { fail "restart -o DIR alone: status $status"; cat "$tmp/alone.err"; }
 # and on 2 ranks (a different rank count than the checkpoint's): allowed
 status=0
-timeout 120 $MPIEXEC --allow-run-as-root --oversubscribe -np 2 "$BIN" "$scene" --restart -o "$run" \
+timeout 120 $MPIEXEC --allow-run-as-root --oversubscribe -np 2 "$BIN" "${scene[@]}" --restart -o "$run" \
   --set run.end_time=0.02 --quiet > "$tmp/np2.out" 2> "$tmp/np2.err" || status=$?
 [ $status -eq 0 ] || { fail "restart on 2 ranks: status $status"; cat "$tmp/np2.err"; }
 "$PY" - "$run" <<'PYEOF' || failures=$((failures + 1))
@@ -111,13 +88,13 @@ with h5py.File(run + "/series.h5") as s:
 assert np.all(np.diff(step) > 0), "series steps not increasing"
 assert abs(t[-1] - 0.02) <= 2.5 * dt, f"series ends at {t[-1]}, expected 0.02"  # 4 x round(0.005/dt) steps
 assert np.allclose(t, step * dt, rtol=0, atol=1e-15), "time != step x dt"
-assert name == "small", f"scene renamed to {name!r}"
+assert name == "small_suspension", f"scene renamed to {name!r}"
 snaps = sorted(glob.glob(run + "/snapshots/snap_*.h5"))
 for f in snaps:
     with h5py.File(f) as h:
         n = h["params"].attrs["scene_name"]
         n = n.decode() if isinstance(n, bytes) else n
-        assert n == "small", f"{f}: scene renamed to {n!r}"
+        assert n == "small_suspension", f"{f}: scene renamed to {n!r}"
 print(f"ok   continued runs (-o DIR alone to 0.015 s, 2 ranks to 0.02 s): {len(t)} series rows, {len(snaps)} snapshots, scene name kept")
 PYEOF
 grep -q "^end_time = 0.02" "$run/scene.toml" || fail "scene.toml does not hold the extended end time"

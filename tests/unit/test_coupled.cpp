@@ -34,6 +34,7 @@
 #include "sim/run.hpp"
 #include "run_quietly.hpp"
 #include "temp_dir.hpp"
+#include "test_scenes.hpp"
 
 namespace {
 
@@ -47,40 +48,12 @@ constexpr double kPi = std::numbers::pi;
 using cgd::testing::run_quietly;
 using cgd::testing::TempDir;
 
-/// Base scene of these tests: air and 75 um, 1500 kg/m^3 particles (docs/models.md's Table 1), periodic box,
-/// two-way coupling; everything else comes as overrides. Contacts are soft (t_c = 0.3 ms, k_n = 0.018
-/// N/m for two primaries): the mean slip of a suspension does not depend on them (contacts are internal
-/// forces), and the DEM step t* t_c = 6 us keeps the tests short. Restitution 0.9, no friction.
-const char* const kBaseScene = R"(
-[domain]
-size_dp = [12, 12, 12]
-gravity = [0.0, -9.81, 0.0]
-[particles]
-diameter = 75e-6
-density = 1500.0
-solids_fraction = 0.1
-velocity_rms = 0.0
-seed = 1
-[contact]
-model = "spring-dashpot"
-stiffness = 1.8e-2
-t_star = 0.02
-restitution = 0.9
-friction = 0.0
-[fluid]
-density = 1.3
-viscosity = 1.8e-5
-dx_over_dp = 3.33
-courant = 0.3
-coupling = "two-way"
-drag = "beetstra"
-pressure_gradient_force = true
-[run]
-end_time = 0.025
-)";
+/// Base scene of these tests: tests/scenes/unit_suspension.toml (air and 75 um particles, 12^3 d_p box of 4^3
+/// cells, two-way coupling, soft contacts); everything else comes as overrides.
 
 cgd::Scene make_scene(const std::vector<std::string>& overrides) {
-  return cgd::load_scene_from_string(kBaseScene, "coupled_test.toml", overrides);
+  return cgd::load_scene_from_string(cgd::testing::test_scene_text("unit_suspension.toml"), "coupled_test.toml",
+                                     overrides);
 }
 
 std::string num(double v) {

@@ -45,6 +45,7 @@
 #include "sim/run.hpp"
 #include "run_quietly.hpp"
 #include "temp_dir.hpp"
+#include "test_scenes.hpp"
 
 namespace {
 
@@ -244,34 +245,12 @@ TEST(Checksum, Fnv1aOfKnownBytes) {
 
 // ---- model files --------------------------------------------------------------------------------------
 
-/// The test scene (air, 75 um particles, 12^3 d_p box with 4^3 cells) with overrides.
-const char* const kScene = R"(
-[domain]
-size_dp = [12, 12, 12]
-gravity = [0.0, -9.81, 0.0]
-[particles]
-diameter = 75e-6
-density = 1500.0
-solids_fraction = 0.1
-seed = 1
-[contact]
-model = "spring-dashpot"
-stiffness = 1.8e-2
-t_star = 0.02
-restitution = 0.9
-friction = 0.0
-[fluid]
-density = 1.3
-viscosity = 1.8e-5
-dx_over_dp = 3.33
-coupling = "two-way"
-drag = "beetstra"
-[run]
-end_time = 0.025
-)";
+/// The test scene tests/scenes/unit_suspension.toml (air, 75 um particles, 12^3 d_p box with 4^3 cells)
+/// with overrides.
 
 cgd::Scene scene_with(const std::vector<std::string>& overrides) {
-  return cgd::load_scene_from_string(kScene, "filtered_test.toml", overrides);
+  return cgd::load_scene_from_string(cgd::testing::test_scene_text("unit_suspension.toml"), "filtered_test.toml",
+                                     overrides);
 }
 
 /// Write `m` (with the test scene's physics) as a model file through cgd-fit's writer.
