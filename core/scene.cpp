@@ -323,7 +323,9 @@ void derive_scales(const SceneReader& in, Scene& s) {
   x.particle_volume_m3 = sphere_volume(d);
   x.particle_mass_kg = p.density_kg_m3 * x.particle_volume_m3;
   x.parcel_diameter_m = p.parcel_size * d;
-  x.parcel_mass_kg = std::pow(p.parcel_size, 3) * x.particle_mass_kg;
+  x.parcel_volume_factor = std::pow(p.parcel_size, 3);
+  x.parcel_volume_m3 = x.parcel_volume_factor * x.particle_volume_m3;
+  x.parcel_mass_kg = x.parcel_volume_factor * x.particle_mass_kg;
 
   if (s.fluid) {
     const FluidConfig& f = *s.fluid;
@@ -422,7 +424,7 @@ void derive_steps(const SceneReader& in, Scene& s) {
 
   const double box_volume = s.domain.size_m[0] * s.domain.size_m[1] * s.domain.size_m[2];
   const double count =
-      std::round(p.solids_fraction * box_volume / (std::pow(p.parcel_size, 3) * x.particle_volume_m3));
+      std::round(p.solids_fraction * box_volume / x.parcel_volume_m3);
   if (count < 1.0)
     in.fail_value("particles", "solids_fraction",
                   "gives no particle in a box of " + SceneReader::format_short(box_volume) +

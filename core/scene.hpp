@@ -87,6 +87,8 @@ struct DerivedScales {
   double particle_volume_m3 = 0;      // primary particle volume V_p
   double particle_mass_kg = 0;        // primary particle mass
   double parcel_diameter_m = 0;       // alpha * d_p (collision diameter)
+  double parcel_volume_factor = 1;    // alpha^3: primaries per parcel (the one place it is computed)
+  double parcel_volume_m3 = 0;        // alpha^3 V_p, the parcel's volume
   double parcel_mass_kg = 0;          // alpha^3 * primary mass
   // fluid-related; 0 when the scene has no fluid
   double u_t_m_s = 0;                 // Schiller-Naumann terminal velocity (docs/models.md convention)

@@ -13,8 +13,8 @@ namespace cgd {
 PeriodicDriving periodic_driving(const Scene& scene) {
   const FluidConfig& f = *scene.fluid;
   const double volume = scene.domain.size_m[0] * scene.domain.size_m[1] * scene.domain.size_m[2];
-  const double phi = static_cast<double>(scene.derived.particle_count) *
-                     std::pow(scene.particles.parcel_size, 3) * scene.derived.particle_volume_m3 / volume;
+  const double phi = static_cast<double>(scene.derived.particle_count) * scene.derived.parcel_volume_factor *
+                     scene.derived.particle_volume_m3 / volume;
   const double rho_p = scene.particles.density_kg_m3, rho_f = f.density_kg_m3;
   const double rho_mix = phi * rho_p + (1.0 - phi) * rho_f;
   // density whose weight the mean pressure gradient carries (see coupled_step.hpp)
@@ -46,7 +46,7 @@ CoupledStep::CoupledStep(const Scene& scene, fluid::FluidGrid& grid, double dt_d
   cs.drag_params = {f.density_kg_m3, f.viscosity_Pa_s, scene.particles.diameter_m};
   cs.filtered = filtered_drag_setup(scene, grid_.spacing());
   cs.particle_volume_m3 = scene.derived.particle_volume_m3;
-  cs.parcel_volume_factor = std::pow(scene.particles.parcel_size, 3);
+  cs.parcel_volume_factor = scene.derived.parcel_volume_factor;
   cs.particle_mass_kg = scene.derived.parcel_mass_kg;
   cs.two_way = f.coupling == Coupling::TwoWay;
   cs.pressure_gradient_force = f.pressure_gradient_force;

@@ -329,7 +329,7 @@ class RunDriver {
     schema::RunSeriesRow r;
     r.time_s = static_cast<double>(step) * dt_;
     r.step = step;
-    r.solids_fraction = static_cast<double>(d.particles) * std::pow(scene_.particles.parcel_size, 3) *
+    r.solids_fraction = static_cast<double>(d.particles) * scene_.derived.parcel_volume_factor *
                         scene_.derived.particle_volume_m3 / volume;
     // slip = <eps u>/<eps> - <phi v>/<phi> (docs/models.md); a quiescent fluid has u = 0
     for (int c = 0; c < 3; ++c) r.slip_velocity_m_s[c] = avg.fluid_velocity[c] - d.velocity_mean[c];
