@@ -11,6 +11,7 @@
 // inline. For parcels, beta_p is evaluated with the primary diameter (docs/models.md, "Parcels").
 #include <cmath>
 #include <functional>
+#include <numbers>
 #include <optional>
 #include <string>
 #include <string_view>
@@ -94,6 +95,9 @@ struct StokesDrag {
     return params.rho_f * params.d * std::abs(slip_speed) / params.mu_f;
   }
   double beta_p(double /*phi*/, double /*slip_speed*/) const { return stokes_beta_; }
+  /// The force per unit slip on one particle, 3 pi mu_f d (kg/s): F_d = force_per_slip() (u - v). The
+  /// quiescent-fluid drive (sim/run.cpp) divides it by the particle mass for its linear drag rate.
+  double force_per_slip() const { return 3.0 * std::numbers::pi * params.mu_f * params.d; }
 
  private:
   double stokes_beta_;  // 18 mu_f / d^2, kg m^-3 s^-1

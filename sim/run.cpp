@@ -135,7 +135,8 @@ dem::DemSettings dem_settings_from_scene(const Scene& scene) {
       const double factor = 1.0 - f.density_kg_m3 / scene.particles.density_kg_m3;
       s.drive.accel = factor * s.drive.accel;
     }
-    s.drive.drag_rate = 3.0 * std::numbers::pi * f.viscosity_Pa_s * scene.particles.diameter_m / d.particle_mass_kg;
+    s.drive.drag_rate =
+        StokesDrag(f.density_kg_m3, f.viscosity_Pa_s, scene.particles.diameter_m).force_per_slip() / d.particle_mass_kg;
     if (s.drive.drag_rate * s.dt_s > 0.5)
       throw InputError(scene.source_path + ": the time step " + std::to_string(s.dt_s) +
                        " s is too large for the Stokes relaxation time " + std::to_string(1.0 / s.drive.drag_rate) +
