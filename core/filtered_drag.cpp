@@ -215,16 +215,7 @@ DragModel load_drag_model(const std::string& path) {
   auto need = [&](const char* key) {
     if (!f.has_attr("/", key)) throw InputError(path + ": drag model file lacks the root attribute " + key);
   };
-  need("cgd_format");
-  const std::string format = f.attr_string("/", "cgd_format");
-  if (format != "drag_model")
-    throw InputError(path + ": cgd_format = \"" + format +
-                     "\": not a drag model file (expected \"drag_model\", " + "written by cgd-fit)");
-  need("cgd_format_version");
-  if (f.attr_int("/", "cgd_format_version") != schema::kFormatVersion)
-    throw InputError(path +
-                     ": cgd_format_version = " + std::to_string(f.attr_int("/", "cgd_format_version")) +
-                     ": this build reads version " + std::to_string(schema::kFormatVersion));
+  check_derived_format(f, "drag_model", "drag model file", "expected \"drag_model\", written by cgd-fit");
   DragModel m;
   m.path = path;
   for (const char* key : {"u_t_convention", "phi_crit", "h_max"}) need(key);

@@ -7,6 +7,7 @@
 
 #include "core/error.hpp"
 #include "core/h5.hpp"
+#include "core/output.hpp"
 #include "core/scene.hpp"
 
 namespace cgd {
@@ -55,6 +56,18 @@ PhysicalSystem physical_system(const Scene& scene, DragLaw base_law) {
 
 double gravity_from_scales(double u_t_m_s, double l_char_m, double diameter_m) {
   return u_t_m_s * u_t_m_s / (diameter_m * std::pow(l_char_m / diameter_m, 3));
+}
+
+void check_derived_format(const h5::File& f, const char* format, const std::string& what, const std::string& hint) {
+  const std::string& path = f.path();
+  for (const char* key : {"cgd_format", "cgd_format_version"})
+    if (!f.has_attr("/", key)) throw InputError(path + ": " + what + " lacks the root attribute " + key);
+  const std::string given = f.attr_string("/", "cgd_format");
+  if (given != format)
+    throw InputError(path + ": cgd_format = \"" + given + "\": not a " + what + " (" + hint + ")");
+  if (f.attr_int("/", "cgd_format_version") != schema::kFormatVersion)
+    throw InputError(path + ": cgd_format_version = " + std::to_string(f.attr_int("/", "cgd_format_version")) +
+                     ": this build reads version " + std::to_string(schema::kFormatVersion));
 }
 
 void write_physical_system(h5::File& f, const PhysicalSystem& system, const char* law_key) {

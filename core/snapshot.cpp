@@ -53,17 +53,11 @@ PhysicalSystem RunPhysics::system() const {
   if (!has_fluid || !law)
     throw InputError(scene_name + ": the run's drag law is '" + drag + "': its physical system needs a fluid and a "
                      "microscopic law (" + drag_law_names(DragKind::Micro) + ")");
-  PhysicalSystem s;
-  s.micro_drag = *law;
-  s.u_t_m_s = u_t_m_s;
-  s.l_char_m = l_char_m;
-  s.diameter_m = diameter_m;
-  s.particle_density_kg_m3 = particle_density_kg_m3;
-  s.fluid_density_kg_m3 = fluid_density_kg_m3;
-  s.fluid_viscosity_Pa_s = fluid_viscosity_Pa_s;
   const auto& g = gravity_m_s2;
-  s.gravity_m_s2 = std::sqrt(g[0] * g[0] + g[1] * g[1] + g[2] * g[2]);
-  return s;
+  return PhysicalSystem{*law,          u_t_m_s,
+                        l_char_m,      diameter_m,
+                        particle_density_kg_m3, fluid_density_kg_m3,
+                        fluid_viscosity_Pa_s,   std::sqrt(g[0] * g[0] + g[1] * g[1] + g[2] * g[2])};
 }
 
 namespace {

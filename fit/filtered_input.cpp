@@ -33,16 +33,7 @@ FilteredFile read_filtered_file(const std::string& path) {
   auto need = [&](const std::string& dataset) {
     if (!f.exists(dataset)) throw InputError(path + ": filtered file lacks the dataset " + dataset);
   };
-  need_attr("/", "cgd_format");
-  const std::string format = f.attr_string("/", "cgd_format");
-  if (format != "filtered")
-    throw InputError(path + ": cgd_format = \"" + format +
-                     "\": not a filtered file (cgd-fit reads the \"filtered\" files of cgd-filter)");
-  need_attr("/", "cgd_format_version");
-  if (f.attr_int("/", "cgd_format_version") != schema::kFormatVersion)
-    throw InputError(path +
-                     ": cgd_format_version = " + std::to_string(f.attr_int("/", "cgd_format_version")) +
-                     ": this build reads version " + std::to_string(schema::kFormatVersion));
+  check_derived_format(f, "filtered", "filtered file", "cgd-fit reads the \"filtered\" files of cgd-filter");
   FilteredFile out;
   out.path = path;
   need_attr("/", "scene");

@@ -8,6 +8,7 @@
 # history (last explicit rate and dt); eps^{n+1}, the drag and the particles' fluid forces are recomputed
 # from the particles; FFTW plans use FFTW_ESTIMATE (deterministic).
 set -euo pipefail
+. "$(dirname "$0")/lib/kill_when_checkpointed.sh"
 BIN=${CGD_BINARY_DIR:?}/cgd-generate
 PY=/usr/bin/python3
 tmp=$(mktemp -d)
@@ -23,18 +24,7 @@ common=(--quiet)
 
 "$BIN" "$SCENE" "${common[@]}" --set run.checkpoint_wall_s=0.25 -o "$tmp/b" > "$tmp/b.log" &
 pid=$!
-# Kill on what the run wrote, not after a time (which flakes on a slow or a fast machine): once a checkpoint
-# exists and 4 snapshots are complete. The loop's 300 s limit only guards against a hang.
-for _ in $(seq 1 30000); do
-  snaps=$(ls "$tmp/b/snapshots" 2>/dev/null | grep -c '^snap_.*\.h5$' || true)
-  [ -f "$tmp/b/checkpoint.h5" ] && [ "$snaps" -ge 4 ] && break
-  kill -0 "$pid" 2>/dev/null || break
-  sleep 0.01
-done
-kill -9 "$pid" 2>/dev/null || true
-wait "$pid" || true
-if [ -f "$tmp/b/DONE" ]; then echo "FAIL: the run finished before it was killed; lengthen it"; exit 1; fi
-[ -f "$tmp/b/checkpoint.h5" ] || { echo "FAIL: no checkpoint written before the kill"; exit 1; }
+kill_when_checkpointed "$pid" "$tmp/b" 4  # once a checkpoint and 4 snapshots are written
 
 "$PY" - "$tmp/b" <<'PYEOF'
 import glob, sys, h5py

@@ -3,6 +3,7 @@
 # `--restart` continues from its last checkpoint to exactly the result of an uninterrupted run
 # (1 rank: bit for bit, positions, velocities, spins and hence the contact history that shaped them).
 set -euo pipefail
+. "$(dirname "$0")/lib/kill_when_checkpointed.sh"
 BIN=${CGD_BINARY_DIR:?}/cgd-generate
 SCENE=${CGD_SOURCE_DIR:?}/data/scenes/granular_gas.toml
 PY=/usr/bin/python3
@@ -15,18 +16,7 @@ common=(--set run.end_time=0.02154 --set run.dump_interval=0.002154 --quiet)
 
 "$BIN" "$SCENE" "${common[@]}" --set run.checkpoint_wall_s=0.25 -o "$tmp/b" > "$tmp/b.log" &
 pid=$!
-# Kill on what the run wrote, not after a time (which flakes on a slow or a fast machine): once a checkpoint
-# exists and 2 snapshots are complete. The loop's 300 s limit only guards against a hang.
-for _ in $(seq 1 30000); do
-  snaps=$(ls "$tmp/b/snapshots" 2>/dev/null | grep -c '^snap_.*\.h5$' || true)
-  [ -f "$tmp/b/checkpoint.h5" ] && [ "$snaps" -ge 2 ] && break
-  kill -0 "$pid" 2>/dev/null || break
-  sleep 0.01
-done
-kill -9 "$pid" 2>/dev/null || true
-wait "$pid" || true
-if [ -f "$tmp/b/DONE" ]; then echo "FAIL: the run finished before it was killed; lengthen it"; exit 1; fi
-[ -f "$tmp/b/checkpoint.h5" ] || { echo "FAIL: no checkpoint written before the kill"; exit 1; }
+kill_when_checkpointed "$pid" "$tmp/b" 2  # once a checkpoint and 2 snapshots are written
 
 # every completed snapshot (renamed into place) is readable; temporary files may be left behind
 "$PY" - "$tmp/b" <<'PYEOF'

@@ -16,6 +16,7 @@
 #include "fit/fitter.hpp"
 #include "fit_test_util.hpp"
 #include "temp_dir.hpp"
+#include "test_scenes.hpp"
 
 namespace {
 
@@ -28,31 +29,8 @@ using cgd::fit::testing::SyntheticSpec;
 using cgd::fit::testing::truth_a;
 using cgd::fit::testing::truth_h;
 
-const char* const kScene = R"(
-[domain]
-size_dp = [30, 120, 30]
-gravity = [0.0, -9.81, 0.0]
-[particles]
-diameter = 75e-6
-density = 1500.0
-solids_fraction = 0.05
-[contact]
-model = "spring-dashpot"
-gamma_star = 0.003
-t_star = 0.02
-restitution = 0.9
-friction = 0.1
-kn_over_kt = 3.5
-gamman_over_gammat = 1.0
-[fluid]
-density = 1.3
-viscosity = 1.8e-5
-dx_over_dp = 3.33
-coupling = "two-way"
-drag = "beetstra"
-[run]
-end_time_tref = 1
-)";
+/// The pipeline demo's box (tests/scenes/demo_box.toml).
+std::string demo_scene() { return cgd::testing::test_scene_text("demo_box.toml"); }
 
 /// A synthetic filtered file whose box widths become coarse grids (H_grid follows the truth at
 /// F = L_char / cell size), with box widths that carry `box_scale` x the truth (a different operator).
@@ -123,7 +101,7 @@ TEST(FitOperator, ModelFileSaysWhatItWasCalibratedForAndTheRunWarns) {
   SyntheticSpec s;
   s.noise = 0.02;
   const FilteredFile f = with_grids(s, 0.5);
-  const cgd::Scene scene = cgd::load_scene_from_string(kScene, "closure_test.toml");
+  const cgd::Scene scene = cgd::load_scene_from_string(demo_scene(), "closure_test.toml");
   FitOptions o;
   o.calibration_operator = "grid";
   const FitResult g = fit({f}, "grid", o);
@@ -168,7 +146,7 @@ TEST(GridTable, ModelReproducesTheTableAtItsPointsAndAppliesIt) {
   SyntheticSpec s;
   s.noise = 0.02;
   const FilteredFile f = with_grids(s, 0.5);
-  const cgd::Scene scene = cgd::load_scene_from_string(kScene, "closure_test.toml");
+  const cgd::Scene scene = cgd::load_scene_from_string(demo_scene(), "closure_test.toml");
   const std::string path = (dir / "perfect.h5").string();
   const WidthSeries& grid = f.grids[2];
   cgd::fit::write_grid_table_model(path, {f}, static_cast<int>(grid.cells_across), 100, scene);

@@ -16,6 +16,7 @@
 #include "core/tsc_grid.hpp"
 #include "filter/filter.hpp"
 #include "sim/coupling/exchange.hpp"
+#include "test_scenes.hpp"
 
 namespace cgd {
 namespace {
@@ -154,33 +155,7 @@ TEST(CoarseGrid, IsTheGridACoarseRunBuildsFromCellsAcross) {
   // The demo box 30 x 120 x 30 d_p: N cells across means fluid.dx_over_dp = 30/N, and the scene rounds
   // box/(dx d_p) per axis: N = 4 -> 4 x 16 x 4 cells of 7.5 d_p; N = 7 -> 7 x 28 x 7 (120/(30/7) = 28);
   // N = 9 -> 9 x 36 x 9 (the resolved run's own grid, dx_over_dp = 3.33 in its scene).
-  const std::string toml = R"(
-[domain]
-size_dp = [30, 120, 30]
-gravity = [0.0, -9.81, 0.0]
-[particles]
-diameter = 7.5e-05
-density = 1500.0
-solids_fraction = 0.05
-[contact]
-model = "spring-dashpot"
-gamma_star = 0.003
-t_star = 0.02
-restitution = 0.9
-friction = 0.1
-kn_over_kt = 3.5
-gamman_over_gammat = 1.0
-[fluid]
-density = 1.3
-viscosity = 1.8e-05
-dx_over_dp = 3.33
-coupling = "two-way"
-drag = "beetstra"
-[run]
-end_time_tref = 1
-[numerics]
-void_fraction_floor = 0.25
-)";
+  const std::string toml = cgd::testing::test_scene_text("demo_box.toml") + "\n[numerics]\nvoid_fraction_floor = 0.25\n";
   const double d = 7.5e-5;
   const filter::CoarseGrid c4 = filter::coarse_grid_of_scene(toml, "demo", 4);
   EXPECT_EQ(c4.grid.cells, (std::array<int, 3>{4, 16, 4}));
