@@ -34,26 +34,11 @@
 
 namespace cgd {
 
-const char* to_string(ContactModel m) {
-  switch (m) {
-    case ContactModel::SpringDashpot:
-      return "spring-dashpot";
-    case ContactModel::None:
-      return "none";
-  }
-  return "?";
-}
+const char* to_string(ContactModel m) { return m == ContactModel::None ? "none" : "spring-dashpot"; }
 
 const char* to_string(Coupling c) {
-  switch (c) {
-    case Coupling::TwoWay:
-      return "two-way";
-    case Coupling::OneWay:
-      return "one-way";
-    case Coupling::Quiescent:
-      return "quiescent";
-  }
-  return "?";
+  constexpr const char* kNames[] = {"quiescent", "one-way", "two-way"};  // the enum's order
+  return kNames[static_cast<int>(c)];
 }
 
 namespace {

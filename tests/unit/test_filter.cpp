@@ -12,6 +12,7 @@
 #include "filter/box_filter.hpp"
 #include "filter/filter.hpp"
 #include "filter/statistics.hpp"
+#include "test_scenes.hpp"
 
 namespace cgd::filter {
 namespace {
@@ -196,14 +197,7 @@ SyntheticRun per_cell_run(bool uniform) {
   Snapshot& s = r.snap;
   s.has_fluid = true;
   s.grid = g;
-  s.physics.diameter_m = d;
-  s.physics.particle_density_kg_m3 = 1500;
-  s.physics.fluid_density_kg_m3 = 1.3;
-  s.physics.fluid_viscosity_Pa_s = 1.8e-5;
-  s.physics.drag = "beetstra";
-  s.physics.pressure_gradient_force = true;
-  s.physics.u_t_m_s = 0.2185;
-  s.physics.l_char_m = 3.02e-4;
+  s.physics = cgd::testing::air_beetstra_physics(d);
   std::mt19937 rng(7);
   std::uniform_real_distribution<double> U(0, 1);
   const BeetstraDrag law(1.3, 1.8e-5, d);

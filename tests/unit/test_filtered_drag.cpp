@@ -46,6 +46,7 @@
 #include "run_quietly.hpp"
 #include "temp_dir.hpp"
 #include "test_scenes.hpp"
+#include "expect_input_error.hpp"
 
 namespace {
 
@@ -321,15 +322,7 @@ TEST(DragModelFile, WidthExponentRoundTripsAndEntersAsFToTheN) {
   EXPECT_DOUBLE_EQ(cgd::load_drag_model(path).width_exponent, 1.0);
 }
 
-void expect_input_error(const std::function<void()>& f, const std::vector<std::string>& words) {
-  try {
-    f();
-    ADD_FAILURE() << "no InputError";
-  } catch (const cgd::InputError& e) {
-    for (const auto& w : words)
-      EXPECT_NE(std::string(e.what()).find(w), std::string::npos) << e.what() << " lacks " << w;
-  }
-}
+using cgd::testing::expect_input_error;
 
 TEST(DragModelFile, RefusesMissingForeignAndOtherSystems) {
   TempDir dir;

@@ -15,6 +15,7 @@
 #include "fit/filtered_input.hpp"
 #include "fit/fitter.hpp"
 #include "fit_test_util.hpp"
+#include "expect_input_error.hpp"
 
 namespace {
 
@@ -279,15 +280,7 @@ TEST(Fit, FitsTheWidthExponent) {
   EXPECT_GT(fixed.chi2_per_dof, 3 * fitted.chi2_per_dof);
 }
 
-void expect_input_error(const std::function<void()>& f, const std::vector<std::string>& words) {
-  try {
-    f();
-    ADD_FAILURE() << "no InputError";
-  } catch (const cgd::InputError& e) {
-    for (const auto& w : words)
-      EXPECT_NE(std::string(e.what()).find(w), std::string::npos) << e.what() << " lacks " << w;
-  }
-}
+using cgd::testing::expect_input_error;
 
 TEST(FitBadInput, TooFewWidthsOrBins) {
   SyntheticSpec two;

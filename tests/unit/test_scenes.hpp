@@ -8,7 +8,24 @@
 #include <stdexcept>
 #include <string>
 
+#include "core/snapshot.hpp"
+
 namespace cgd::testing {
+
+/// The /params of a snapshot of a resolved two-way Beetstra run in air (the scene's numbers: 1500 kg/m^3
+/// particles of diameter d, u_t and L_char of 75 um particles), for snapshots built by hand.
+inline RunPhysics air_beetstra_physics(double d) {
+  RunPhysics p;
+  p.diameter_m = d;
+  p.particle_density_kg_m3 = 1500;
+  p.fluid_density_kg_m3 = 1.3;
+  p.fluid_viscosity_Pa_s = 1.8e-5;
+  p.drag = "beetstra";
+  p.pressure_gradient_force = true;
+  p.u_t_m_s = 0.2185;
+  p.l_char_m = 3.02e-4;
+  return p;
+}
 
 /// tests/scenes/<file> of the source tree ($CGD_SOURCE_DIR, set by CTest, else the configured source dir).
 inline std::string test_scene_text(const std::string& file) {

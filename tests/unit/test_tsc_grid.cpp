@@ -179,14 +179,7 @@ Snapshot coupled_snapshot(const PeriodicGrid& g, const std::vector<double>& posi
   const double d = 75e-6;
   s.has_fluid = true;
   s.grid = g;
-  s.physics.diameter_m = d;
-  s.physics.particle_density_kg_m3 = 1500;
-  s.physics.fluid_density_kg_m3 = 1.3;
-  s.physics.fluid_viscosity_Pa_s = 1.8e-5;
-  s.physics.drag = "beetstra";
-  s.physics.pressure_gradient_force = true;
-  s.physics.u_t_m_s = 0.2185;
-  s.physics.l_char_m = 3.02e-4;
+  s.physics = cgd::testing::air_beetstra_physics(d);
   s.position = positions;
   s.count = static_cast<std::int64_t>(positions.size() / 3);
   const double vp = std::numbers::pi / 6 * d * d * d;
