@@ -268,7 +268,11 @@ void write_filtered_file(const FilterPlan& plan, const FilterOptions& o, const s
     try {
       scene = load_scene_from_string(r0.physics.scene_toml, r0.path + "/scene");
       scene_ok = true;
-    } catch (const std::exception&) {
+    } catch (const std::exception& e) {
+      // a run whose stored scene this build no longer reads (an older run): its text and the physical
+      // system below are still written, the /params of the common attributes are not; said, not swallowed
+      std::cerr << "warning: " << e.what() << ": " << o.output_path
+                << " gets the run's scene text without the common /params\n";
     }
     if (scene_ok) {
       schema::write_common(f, "filtered", scene);
