@@ -52,10 +52,10 @@ mk generate filter >"$tmp/make2.log" 2>&1 || fail "make after make -n: $(tail -n
 
 # ---- help, summary, figures: print, write nothing, plan no run ----
 mk help >/dev/null 2>&1 || fail "make help failed"
-out=$(mk summary 2>&1); s=$?
+out=$(timeout 120 make -f Makefile.pipeline "${vars[@]}" summary 2>&1); s=$?
 [ $s -ne 0 ] && grep -q "no complete run yet" <<<"$out" && ok "make summary without a complete run: says so, runs nothing" ||
   fail "make summary without a complete run: status $s: $(tail -n 3 <<<"$out")"
-out=$(mk figures 2>&1); s=$?
+out=$(timeout 120 make -f Makefile.pipeline "${vars[@]}" figures 2>&1); s=$?
 [ $s -ne 0 ] && grep -q "no study yet" <<<"$out" && ok "make figures without a study: says so, runs nothing" ||
   fail "make figures without a study: status $s: $(tail -n 3 <<<"$out")"
 n=$(mk -n summary 2>&1)
