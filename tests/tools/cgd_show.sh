@@ -71,6 +71,10 @@ out=$("$show" other.h5 2>&1); s=$?
 [ $s -eq 2 ] && grep -q "not a cgd file" <<<"$out" && ok "an HDF5 file without cgd_format: exit 2" || fail "other.h5: $s $out"
 out=$("$show" run/snapshots 2>&1); s=$?
 [ $s -eq 2 ] && grep -q "not a cgd run directory" <<<"$out" && ok "a directory that is not a run: exit 2" || fail "snapshots dir: $s $out"
+# a run directory given to cgd-fit: it says the run is filtered first (not "not a regular file")
+out=$("$binary_dir/cgd-fit" run -o fit_of_run.h5 2>&1); s=$?
+[ $s -eq 2 ] && grep -q "run directory, not a filtered file: filter it first (cgd-filter" <<<"$out" && [ ! -e fit_of_run.h5 ] &&
+  ok "cgd-fit RUN_DIR: exit 2, filter it first" || fail "cgd-fit RUN_DIR: $s $out"
 h=$("$show" --help 2>&1); s=$?
 missing=""
 for k in "run directory" snapshot checkpoint series filtered drag_model coarse_summary study "PATH is" "--plot FILE.png" "Exit status"; do
