@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # tools/cgd-show on every kind it knows (issue 19): a tiny resolved run (20 x 80 x 20 d_p, 1 t_ref) gives the run
-# directory, a snapshot, the checkpoint and the series; cgd-filter, cgd-fit and cgd-coarse --summarise give a
-# filtered file, a drag model and a coarse summary; tools/study.py a study. For each kind: a text summary (exit 0)
+# directory, a snapshot, the checkpoint and the series; cgd-filter, cgd-fit (and --grid-table) and cgd-coarse
+# --summarise give a filtered file, a drag model, a table model (the perfect closure) and a coarse summary; tools/study.py a study. For each kind: a text summary (exit 0)
 # that writes no file (not beside its input, not in the working directory, not in TMPDIR, no cgd-show file in /tmp), and --plot FILE.png that draws a
 # PNG there (exit 0). A picture that cannot be drawn (no directory for it, a version-1 study) and a file that is
 # not a cgd file are refused with exit 2 and a message; --help lists the kinds and what PATH may be.
@@ -20,10 +20,12 @@ export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1
 "$binary_dir/cgd-generate" "$source_dir/data/scenes/pipeline_demo.toml" --set 'domain.size_dp=[20,80,20]' \
   --set run.end_time_tref=1 --set run.dump_interval_tref=0.1 --set run.sampling_start_tref=0.5 \
   --set particles.solids_fraction=0.05 --quiet -o run >gen.log 2>&1 || { cat gen.log; echo "FAIL tiny run"; exit 1; }
-"$binary_dir/cgd-filter" run --from-tref 0.5 --widths 5,6.67,10 --bins 0.005 --quiet -o filtered.h5 >filter.log 2>&1 ||
+"$binary_dir/cgd-filter" run --from-tref 0.5 --widths 5,6.67,10 --grids 4 --bins 0.005 --quiet -o filtered.h5 >filter.log 2>&1 ||
   { cat filter.log; echo "FAIL filter"; exit 1; }
 "$binary_dir/cgd-fit" filtered.h5 --min-width-over-cell 1.4 --min-count 20 --bootstrap 20 --no-cross-validation \
   -o model.h5 >fit.log 2>&1 || { cat fit.log; echo "FAIL fit"; exit 1; }
+"$binary_dir/cgd-fit" filtered.h5 --grid-table 4 --min-count 20 -o perfect.h5 >perfect.log 2>&1 ||
+  { cat perfect.log; echo "FAIL fit --grid-table"; exit 1; }
 "$binary_dir/cgd-coarse" --summarise run --from-tref 0.5 -o summary.h5 >summarise.log 2>&1 ||
   { cat summarise.log; echo "FAIL summarise"; exit 1; }
 mkdir -p coarse/phi0.05_c6_a1_micro_s1 && cp summary.h5 coarse/phi0.05_c6_a1_micro_s1/
@@ -39,6 +41,7 @@ checks=("run directory|run|run: complete (DONE)"
         "series|run/series.h5|format        series"
         "filtered|filtered.h5|H = 1 - beta_bar/beta_micro"
         "drag_model|model.h5|base law beetstra, H(F, phi)"
+        "drag_model (table)|perfect.h5|a table model (the perfect closure"
         "coarse_summary|summary.h5|coarse run summary"
         "study|study.h5|over the solids fractions")
 for c in "${checks[@]}"; do
@@ -50,7 +53,7 @@ for c in "${checks[@]}"; do
   [ -z "$(find work tmpdir -mindepth 1)" ] && [ -z "$(find /tmp -maxdepth 1 -newer marker -iname '*cgd*show*' 2>/dev/null)" ] &&
     [ "$(cd "$tmp" && find . -newer gen.log -type f ! -name marker | sort | md5sum)" = "$listing" ] &&
     ok "$kind: no file written without --plot" || fail "$kind: files written without --plot: $(find work tmpdir -mindepth 1) $(find /tmp -maxdepth 1 -newer marker -iname '*cgd*show*')"
-  png="pictures/${kind// /_}.png"
+  png="pictures/$(tr -c 'A-Za-z0-9_\n' _ <<<"$kind").png"
   out=$("$show" "$tmp/$path" --plot "$png" 2>&1); s=$?
   [ $s -eq 0 ] && [ "$(head -c 4 "$png" 2>/dev/null | tail -c 3)" = "PNG" ] && ok "$kind: --plot draws $png" ||
     fail "$kind: --plot status $s, $(ls -l "$png" 2>&1): $(tail -n 2 <<<"$out")"
