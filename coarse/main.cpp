@@ -74,6 +74,9 @@ int main(int argc, char** argv) {
         "Coarse-grid CFD-DEM / CFD-DPM (parcels) of a scene; prints the time-averaged slip over the sampling "
         "window and, with --reference, its error against a resolved run",
         [&](CLI::App& app) {
+          // the shared example (a dry scene) is one cgd-coarse refuses: name one it runs
+          app.get_option("scene")->description("Scene file (TOML) with a coupled fluid, e.g. data/scenes/pipeline_demo.toml; "
+                                                "with --restart -o DIR it may be left out (DIR/scene.toml is used)");
           app.add_option("--model", model, "drag model file of cgd-fit: the same as --set fluid.drag=model "
                                            "--set fluid.drag_model=MODEL.h5");
           app.add_option("--reference", reference, "resolved run directory (cgd-generate) to compare the slip with");

@@ -95,6 +95,11 @@ int main(int argc, char** argv) {
       options.width_exponent = n;
     }
 
+    if (parcel_model.empty())  // a run directory is filtered first: say so (not "not a regular file")
+      for (const std::string& in : inputs)
+        if (std::filesystem::is_directory(in))
+          throw cgd::InputError("cgd-fit: " + in + " is a run directory, not a filtered file: filter it first (cgd-filter " +
+                                in + " -o FILTERED.h5, docs/filter.md), then fit FILTERED.h5");
     {
       std::vector<std::string> read = inputs;
       if (!parcel_model.empty()) read.push_back(parcel_model);

@@ -59,9 +59,10 @@ def main():
                 print(f"{r['phi']:5.2f} {r[x]:{x_format}} {name:>9} {r['R']:2.0f} {r['slip']:7.3f} +- {r['slip_se']:5.3f} "
                       f"{100 * r['error']:6.1f} +- {100 * r['error_se']:4.1f} {r['cost']:9.3g}")
             if pts:
+                # a line joins two or more points; a single point is a marker alone (in the legend too)
                 ax.errorbar([r[x] for r in pts], [r["slip"] for r in pts], yerr=[r["slip_se"] for r in pts],
-                            fmt="-", marker=style.get("marker", "o"), color=color, label=label,
-                            **{k: v for k, v in style.items() if k != "marker"})
+                            linestyle="-" if len(pts) > 1 else "none", marker=style.get("marker", "o"), color=color,
+                            label=label, **{k: v for k, v in style.items() if k != "marker"})
 
     # ---- Figure 2 ----
     fig, axes = plt.subplots(1, len(phis), figsize=(4 * len(phis), 3.8), squeeze=False)

@@ -125,11 +125,13 @@ def main():
     if plt is None:
         return
     ax.axhline(0, color="k", lw=0.5)
-    ax.set_xlabel("filtered solids fraction φ̄")
-    ax.set_ylabel("H = 1 − β̄ / β_micro")
+    ax.set_xlabel(r"filtered solids fraction $\bar{\phi}$")
+    ax.set_ylabel(r"H = 1 $-$ $\bar{\beta}$ / $\beta_{micro}$")
     ax.set_title(f"{os.path.basename(a.file)}: filtered drag correction (dashed: Radl 2014 at the same F)", fontsize=9)
-    ax.legend(fontsize=8)
+    # the legend beside the axes: inside it hid the whole-box point (at <phi>, the upper left)
+    ax.legend(fontsize=8, loc="upper left", bbox_to_anchor=(1.02, 1.0))
     out = a.output or os.path.splitext(a.file)[0] + ".png"
+    fig.set_size_inches(10, 5)
     fig.tight_layout()
     fig.savefig(out, dpi=120)
     print(f"wrote {out}")

@@ -1,8 +1,9 @@
 #!/usr/bin/python3
 """Plot a drag model file of cgd-fit (docs/schema-drag-model.md).
 
-Left: h(phi) with its 95 % band and the per-bin estimates (the paper's Figure 1); middle: a(phi) the
-same way; right: H(F, phi) = h/(1 + aF^n) against F (n = the file's width_exponent, 1 = the paper's) for a few phi, with bands at the data's widths.
+Left: h(phi) with its 95 % band and the per-bin estimates (the paper's Figure 1); middle: H(F, phi) against phi
+at the smallest, a middle and the largest calibrated F, beside Radl 2014's at the same F (the fitted a multiplies
+F^n and Radl's a multiplies F: the a's are not comparable, H is); right: H(F, phi) = h/(1 + aF^n) against F (n = the file's width_exponent, 1 = the paper's) for a few phi, with bands at the data's widths.
 Radl & Sundaresan 2014 (the published piecewise cubics, data/reference/radl2014-filtered-drag.csv) is
 drawn beside the fit, dashed.
 
@@ -93,17 +94,22 @@ def main():
     ax[0].axvline(phi_crit, color="grey", lw=0.5)
     ax[0].set(xlabel=r"$\bar\phi_p$", ylabel="h", title="h: largest drag correction (F -> 0)")
     ax[0].legend(fontsize=8)
-    ax[1].fill_between(phi, b["a_low"], b["a_high"], alpha=0.3)
-    ax[1].plot(phi, b["a"], label="fit")
-    a_err = np.vstack([bins["a"][used] * (1 - np.exp(-1.96 * se_log_a[used])),
-                       bins["a"][used] * (np.exp(1.96 * se_log_a[used]) - 1)])
-    ax[1].errorbar(bins["phi"][used], bins["a"][used], yerr=a_err, fmt="o", ms=3, label="per-bin fit")
-    if bound.any():
-        ax[1].plot(bins["phi"][bound], bins["a"][bound], "o", mfc="none", ms=5, label="per-bin fit at a bound")
-    ax[1].plot(phi, ra(phi), "k--", label="Radl & Sundaresan 2014")
-    ax[1].set_ylim(min(b["a"].min(), 1.0) / 5, max(b["a"].max(), 25.0) * 5)
-    ax[1].set(xlabel=r"$\bar\phi_p$", ylabel="a", yscale="log", title="a: width dependence 1/(1 + aF)" if n == 1 else f"a: width dependence 1/(1 + aF^n), n = {n:.2f}")
-    ax[1].legend(fontsize=8)
+    # H(F, phi) against phi at a few of the calibrated F: the fit (h/(1 + aF^n), its 95 % band) beside Radl 2014's
+    # h/(1 + aF) at the same F. The a's themselves are not comparable when n != 1 (a multiplies F^n, Radl's a F)
+    Fs = np.unique(b["F"])
+    picks = sorted({0, len(Fs) // 2, len(Fs) - 1}) if len(Fs) else []
+    for k in picks:
+        Fk = Fs[k]
+        row = int(np.argmin(abs(b["F"] - Fk)))
+        line, = ax[1].plot(phi, b["h"] / (1 + b["a"] * Fk**n), label=f"fit, F = {Fk:.3g}")
+        ax[1].fill_between(phi, b["H_low"][row], b["H_high"][row], color=line.get_color(), alpha=0.2)
+        ax[1].plot(phi, rh(phi) / (1 + ra(phi) * Fk), "--", color=line.get_color(), lw=1,
+                   label=f"Radl 2014, F = {Fk:.3g}")
+    ax[1].axhline(0, color="k", lw=0.5)
+    ax[1].set(xlabel=r"$\bar\phi_p$", ylabel=r"H = h/(1 + a F$^n$)",
+              title="H(F, φ) at the calibrated F: fit (band 95 %) vs Radl 2014 (dashed)")
+    ax[1].set_ylim(-0.1, 1.05)
+    ax[1].legend(fontsize=7)
     F = np.geomspace(max(b["F"].min() / 3, 1e-3), b["F"].max() * 3, 100)
     for target in (0.05, 0.1, 0.2, 0.3, 0.4):
         if target > phi[-1]:

@@ -95,6 +95,51 @@ def pareto(items, key):
     return front
 
 
+MARKERS = {"micro": "o", "model": "^", "modelraw": "x", "radl2014": "v", "perfect": "*"}
+
+
+def draw(configs, agg, ref_costs, plt):
+    """The study's picture (study.png; tools/cgd-show STUDY.h5 --plot): every configuration at every phi (faint) and
+    the rms error over the solids fractions with its 68 % interval against cost; marker = law, colour = parcel size
+    alpha (both keyed), the Pareto front, the 5 % and 15 % error levels labelled, the resolved runs' costs dotted.
+    configs: dicts with cost, error, drag, alpha; agg: with cost, error, rms_low, rms_high, drag, alpha, pareto."""
+    fig, ax = plt.subplots(figsize=(8.5, 5))
+    colour = lambda alpha: "C%d" % (int(round(alpha)) % 10)
+    for c in configs:  # every configuration at every phi, faint
+        ax.plot(c["cost"], 100 * max(abs(c["error"]), 1e-2), MARKERS.get(c["drag"], "s"), color=colour(c["alpha"]),
+                ms=4, alpha=0.3)
+    for c in agg:  # rms error over the solids fractions with its 68 % interval
+        y = 100 * max(c["error"], 1e-2)
+        ax.errorbar(c["cost"], y, yerr=[[max(y - 100 * c["rms_low"], 0)], [max(100 * c["rms_high"] - y, 0)]],
+                    fmt=MARKERS.get(c["drag"], "s"), color=colour(c["alpha"]), ms=8)
+    for cost in ref_costs:
+        ax.axvline(cost, color="gray", lw=0.8, ls=":")
+    if ref_costs:
+        ax.plot([], [], color="gray", lw=0.8, ls=":", label="resolved runs' cost")
+    front = sorted([c for c in agg if c["pareto"]], key=lambda c: c["cost"])
+    if front:
+        ax.plot([c["cost"] for c in front], [100 * max(c["rms_high"], 1e-2) for c in front], "k--", lw=1,
+                label="Pareto front (upper 68 % bound)")
+    for d, m in MARKERS.items():
+        if any(c["drag"] == d for c in configs):
+            ax.plot([], [], m, color="k", label=f"law: {d}")
+    for alpha in sorted({c["alpha"] for c in configs}):  # the colour key
+        ax.plot([], [], "s", color=colour(alpha), ms=8, label=f"α = {alpha:g}")
+    ax.set_xscale("log")
+    ax.set_yscale("log")
+    for level, col in ((5, "r"), (15, "orange")):
+        ax.axhline(level, color=col, lw=0.6)
+        ax.annotate(f"{level} % error", xy=(1.0, level), xycoords=("axes fraction", "data"), xytext=(-4, 2),
+                    textcoords="offset points", ha="right", va="bottom", fontsize=8, color=col)
+    ax.set_xlabel("cost (core-seconds per simulated second)")
+    ax.set_ylabel("|error of <u_slip,y>| (%)")
+    ax.set_title("rms error over the solids fractions (68 % interval) against cost\n(faint: single configurations; "
+                 "marker: law; colour: parcel size α)", fontsize=9)
+    ax.legend(fontsize=8, loc="upper left", bbox_to_anchor=(1.02, 1.0))
+    fig.tight_layout()
+    return fig
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--coarse", nargs="+", default=[])
@@ -299,38 +344,10 @@ def main():
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
-    fig, ax = plt.subplots(figsize=(7.5, 5))
-    markers = {"micro": "o", "model": "^", "modelraw": "x", "radl2014": "v", "perfect": "*"}
-    for c in configs:  # every configuration at every phi, faint
-        ax.plot(c["cost"], 100 * max(abs(c["error"]), 1e-2), markers.get(c["drag"], "s"),
-                color="C%d" % (int(round(c["alpha"])) % 10), ms=4, alpha=0.3)
-    for c in agg:  # rms error over the solids fractions with its 68 % interval
-        y = 100 * max(c["error"], 1e-2)
-        ax.errorbar(c["cost"], y, yerr=[[max(y - 100 * c["rms_low"], 0)], [max(100 * c["rms_high"] - y, 0)]],
-                    fmt=markers.get(c["drag"], "s"), color="C%d" % (int(round(c["alpha"])) % 10), ms=8)
-    for ref in refs.values():
-        if np.isfinite(ref["cost"]):
-            ax.axvline(ref["cost"], color="gray", lw=0.8, ls=":")
-    f_rows = pareto(complete, "rms_high")
-    if f_rows:
-        ax.plot([c["cost"] for c in f_rows], [100 * max(c["rms_high"], 1e-2) for c in f_rows], "k--", lw=1,
-                label="Pareto front (upper 68 % bound)")
-    for d, m in markers.items():
-        if any(c["drag"] == d for c in configs):
-            ax.plot([], [], m, color="k", label=f"law: {d}")
-    ax.set_xscale("log")
-    ax.set_yscale("log")
-    ax.axhline(5, color="r", lw=0.5)
-    ax.axhline(15, color="orange", lw=0.5)
-    ax.set_xlabel("cost (core-seconds per simulated second)")
-    ax.set_ylabel("|error of <u_slip,y>| (%)")
-    ax.set_title("rms error over the solids fractions (68 % interval) against cost\n(faint: single configurations; "
-                 "colour: parcel size α; dotted: resolved runs)", fontsize=9)
-    ax.legend(fontsize=8)
-    fig.tight_layout()
+    fig = draw(configs, agg, [ref["cost"] for ref in refs.values() if np.isfinite(ref["cost"])], plt)
     fig.savefig(a.output + ".png.tmp.png", dpi=120)
     os.replace(a.output + ".png.tmp.png", a.output + ".png")
-    print(f"wrote {a.output}.csv, {a.output}_runs.csv, {a.output}.h5, {a.output}.png")
+    print(f"wrote {a.output}.csv, {a.output}_runs.csv, {a.output}.h5, {a.output}.png", file=sys.stderr)
 
 
 if __name__ == "__main__":
