@@ -36,6 +36,7 @@ struct UniformDrive {
   V3 accel{0, 0, 0};
   double drag_rate = 0;  // 1/s
   inline V3 operator()(std::size_t, V3 v) const { return accel - drag_rate * v; }
+  const double* prefetch_base() const { return nullptr; }
 };
 
 /// Per-particle external acceleration, constant over the DEM sub-steps of a fluid step (coupled runs:
@@ -43,6 +44,7 @@ struct UniformDrive {
 struct PerParticleDrive {
   const double* accel = nullptr;  // 3 per owned particle
   inline V3 operator()(std::size_t i, V3) const { return load3(accel + 3 * i); }
+  const double* prefetch_base() const { return accel; }
 };
 
 struct KernelStats {
@@ -76,8 +78,9 @@ inline double kick_drift(std::size_t i, double* x, double* v, V3 f, const Drive&
 inline V3 kicked_spin(V3 w, V3 torque, const KernelConstants& k) { return w + (k.dt * k.inv_inertia) * torque; }
 
 /// Pass 1: the force (and torque) on each particle of `rows` (particles with a non-empty list) from its
-/// list, in the list's order, into force[3 i..] (torque[3 i..] with friction). Updates the tangential
-/// histories and the overlap statistics.
+/// list, in the list's order, into force[3 r..] (torque[3 r..] with friction) for row r: the forces are
+/// stored per row, a sequential stream, not per particle. Updates the tangential histories and the
+/// overlap statistics.
 template <class Contact>
 void compute_forces(const Particles& p, NeighborList& list, const Contact& contact, const KernelConstants& k,
                     const std::int32_t* rows, std::size_t n_rows, double* __restrict force,
@@ -93,13 +96,17 @@ void compute_forces(const Particles& p, NeighborList& list, const Contact& conta
   // prefetch distance in list entries: entries are contiguous over rows (CSR), so the look-ahead runs
   // on into the next particles' lists
   constexpr std::int64_t kAhead = 8;
+  constexpr std::size_t kRowAhead = 4;
   for (std::size_t r = 0; r < n_rows; ++r) {
     const std::size_t i = static_cast<std::size_t>(rows[r]);
-    const V3 xi = load3(x + 3 * i), vi = load3(v + 3 * i);
+    if (r + kRowAhead < n_rows) {
+      const std::size_t ia = 3 * static_cast<std::size_t>(rows[r + kRowAhead]);
+      __builtin_prefetch(x + ia);
+      __builtin_prefetch(x + ia + 2);
+    }
+    const V3 xi = load3(x + 3 * i);
     V3 f{0, 0, 0};
     V3 torque{0, 0, 0};
-    V3 wi{0, 0, 0};
-    if constexpr (kFriction) wi = load3(w + 3 * i);
     const std::int64_t k0 = offset[i], k1 = offset[i + 1];
     for (std::int64_t e = k0; e < k1; ++e) {
       if (e + kAhead < n_entries) {
@@ -125,31 +132,49 @@ void compute_forces(const Particles& p, NeighborList& list, const Contact& conta
         st.overlap_particle = p.id[i];
         st.overlap_partner = p.id[j];
       }
-      const V3 dv = vi - load3(v + 3 * j);
+      // the row's own velocity and spin only where it touches (most rows touch nothing)
+      const V3 dv = load3(v + 3 * i) - load3(v + 3 * j);
       if constexpr (kFriction) {
-        f = f + contact.force(dx, rr, overlap, dv, wi, load3(w + 3 * j), k.radius, k.radius, &list.xi[3 * e], torque);
+        f = f + contact.force(dx, rr, overlap, dv, load3(w + 3 * i), load3(w + 3 * j), k.radius, k.radius, &list.xi[3 * e], torque);
       } else {
         f = f + contact.normal_force(dx, rr, overlap, dv);
       }
     }
-    store3(force + 3 * i, f);
-    if constexpr (kFriction) store3(torque_out + 3 * i, torque);
+    store3(force + 3 * r, f);
+    if constexpr (kFriction) store3(torque_out + 3 * r, torque);
   }
 }
 
-/// Pass 2: kick and drift the particles of `idx` in place from their stored forces (zero for a
-/// particle whose list is empty) and the drive; spins from the stored torques. Records the largest
-/// speed and the first non-finite velocity.
+/// Pass 2: kick and drift the particles of `idx` in place from the forces of pass 1 (per row: `rows`, a
+/// subsequence of `idx`, both increasing; zero for a particle whose list is empty) and the drive; spins
+/// from the torques. Records the largest speed and the first non-finite velocity.
 template <class Drive>
 void integrate(Particles& p, const double* __restrict force, const double* __restrict torque, const Drive& drive,
-               const KernelConstants& k, const std::int32_t* idx, std::size_t n, KernelStats& st) {
+               const KernelConstants& k, const std::int32_t* idx, std::size_t n, const std::int32_t* rows,
+               std::size_t n_rows, KernelStats& st) {
   double* __restrict x = p.x.data();
   double* __restrict v = p.v.data();
   double* __restrict w = p.rotation ? p.w.data() : nullptr;
+  const V3 zero{0, 0, 0};
+  constexpr std::size_t kAhead = 8;
+  std::size_t r = 0;
   for (std::size_t m = 0; m < n; ++m) {
     const std::size_t i = static_cast<std::size_t>(idx[m]);
-    const double s2 = kick_drift(i, x + 3 * i, v + 3 * i, load3(force + 3 * i), drive, k);
-    if (w) store3(w + 3 * i, kicked_spin(load3(w + 3 * i), load3(torque + 3 * i), k));
+    if (m + kAhead < n) {
+      const std::size_t ia = 3 * static_cast<std::size_t>(idx[m + kAhead]);
+      for (const double* a : {static_cast<const double*>(x), static_cast<const double*>(v),
+                              static_cast<const double*>(w), drive.prefetch_base()}) {
+        if (!a) continue;
+        __builtin_prefetch(a + ia);
+        __builtin_prefetch(a + ia + 2);
+      }
+    }
+    // a particle without a list has no force: the zero the force array used to hold for it
+    const bool has_force = r < n_rows && static_cast<std::size_t>(rows[r]) == i;
+    const V3 f = has_force ? load3(force + 3 * r) : zero;
+    const double s2 = kick_drift(i, x + 3 * i, v + 3 * i, f, drive, k);
+    if (w) store3(w + 3 * i, kicked_spin(load3(w + 3 * i), has_force ? load3(torque + 3 * r) : zero, k));
+    r += has_force;
     if (!(s2 <= st.max_speed2)) {  // also true for NaN
       if (!std::isfinite(s2) && st.bad_particle < 0) st.bad_particle = p.id[i];
       st.max_speed2 = std::isfinite(st.max_speed2) ? s2 : st.max_speed2;
