@@ -16,7 +16,9 @@
 // formed for output all call it, so a particle moved in free flight over n steps gets exactly the n
 // kicks and drifts the integration pass would have given it, bit for bit.
 #include <algorithm>
+#include <bit>
 #include <cmath>
+#include <cstddef>
 #include <cstdint>
 #include <type_traits>
 
@@ -36,7 +38,7 @@ struct UniformDrive {
   V3 accel{0, 0, 0};
   double drag_rate = 0;  // 1/s
   inline V3 operator()(std::size_t, V3 v) const { return accel - drag_rate * v; }
-  const double* prefetch_base() const { return nullptr; }
+  std::nullptr_t prefetch_base() const { return nullptr; }  // nothing per particle to prefetch
 };
 
 /// Per-particle external acceleration, constant over the DEM sub-steps of a fluid step (coupled runs:
@@ -110,18 +112,22 @@ void compute_forces(const Particles& p, NeighborList& list, const Contact& conta
     const std::int64_t k0 = offset[i], k1 = offset[i + 1];
     for (std::int64_t e = k0; e < k1; ++e) {
       if (e + kAhead < n_entries) {
+        // the partner's position only: its velocity and spin are needed where it touches, which few do
         const std::int32_t jn = index[e + kAhead];
         __builtin_prefetch(x + 3 * jn);
-        __builtin_prefetch(v + 3 * jn);
-        if constexpr (kFriction) __builtin_prefetch(w + 3 * jn);
+        __builtin_prefetch(x + 3 * jn + 2);
       }
       const std::int32_t j = index[e];
       const V3 dx = xi - load3(x + 3 * j);
       const double r2 = dot(dx, dx);
       if (r2 >= contact_dist2) {
         if constexpr (kFriction) {
+          // contact ended: its history goes with it. Written only where it is not +0.0 already (bit
+          // pattern: a -0.0 becomes +0.0 as before), so that the entries that never touch are only read.
           double* s = &list.xi[3 * e];
-          s[0] = s[1] = s[2] = 0.0;  // contact ended: its history goes with it
+          if ((std::bit_cast<std::uint64_t>(s[0]) | std::bit_cast<std::uint64_t>(s[1]) |
+               std::bit_cast<std::uint64_t>(s[2])) != 0)
+            s[0] = s[1] = s[2] = 0.0;
         }
         continue;
       }
@@ -160,13 +166,19 @@ void integrate(Particles& p, const double* __restrict force, const double* __res
   std::size_t r = 0;
   for (std::size_t m = 0; m < n; ++m) {
     const std::size_t i = static_cast<std::size_t>(idx[m]);
-    if (m + kAhead < n) {
+    if (m + kAhead < n) {  // the state of a particle a few ahead (both ends of its 24 bytes)
       const std::size_t ia = 3 * static_cast<std::size_t>(idx[m + kAhead]);
-      for (const double* a : {static_cast<const double*>(x), static_cast<const double*>(v),
-                              static_cast<const double*>(w), drive.prefetch_base()}) {
-        if (!a) continue;
-        __builtin_prefetch(a + ia);
-        __builtin_prefetch(a + ia + 2);
+      __builtin_prefetch(x + ia);
+      __builtin_prefetch(x + ia + 2);
+      __builtin_prefetch(v + ia);
+      __builtin_prefetch(v + ia + 2);
+      if constexpr (!std::is_same_v<decltype(drive.prefetch_base()), std::nullptr_t>) {
+        __builtin_prefetch(drive.prefetch_base() + ia);
+        __builtin_prefetch(drive.prefetch_base() + ia + 2);
+      }
+      if (w) {
+        __builtin_prefetch(w + ia);
+        __builtin_prefetch(w + ia + 2);
       }
     }
     // a particle without a list has no force: the zero the force array used to hold for it
