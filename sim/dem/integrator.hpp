@@ -2,10 +2,12 @@
 // The DEM step in two passes over the particles' one state (issue 17; it was one fused pass into a
 // second state buffer):
 //   1. forces   a flat pass over the neighbour-list entries of the particles that have any, with the
-//               partners' positions and velocities prefetched a few entries ahead (the partner's
-//               position was the pass's one cache miss); each particle's force (and torque) is summed
-//               in its list's canonical order and stored;
-//   2. integrate a streaming pass, in place, over the particles that must move this step: leapfrog
+//               partners' positions prefetched a few entries ahead and the rows' positions a few rows
+//               ahead (both were the pass's cache misses; velocities and spins are read only where a
+//               pair touches, which few list entries do); each particle's force (and torque) is summed
+//               in its list's canonical order and stored per row, one sequential stream;
+//   2. integrate a pass, in place, over the particles that must move this step (their state prefetched
+//               a few ahead; a particle's force is the next row's when it is that row, else zero): leapfrog
 //               (kick-drift, symplectic, second order)
 //     v_{n+1/2} = v_{n-1/2} + dt a_n,   x_{n+1} = x_n + dt v_{n+1/2},   w_{n+1/2} = w_{n-1/2} + dt T_n / I,
 //               with a_n = F_n/m + a_ext(v_{n-1/2}).
