@@ -2,10 +2,12 @@
 // The DEM step in two passes over the particles' one state (issue 17; it was one fused pass into a
 // second state buffer):
 //   1. forces   a flat pass over the neighbour-list entries of the particles that have any, with the
-//               partners' positions and velocities prefetched a few entries ahead (the partner's
-//               position was the pass's one cache miss); each particle's force (and torque) is summed
-//               in its list's canonical order and stored;
-//   2. integrate a streaming pass, in place, over the particles that must move this step: leapfrog
+//               partners' positions prefetched a few entries ahead and the rows' positions a few rows
+//               ahead (both were the pass's cache misses; velocities and spins are read only where a
+//               pair touches, which few list entries do); each particle's force (and torque) is summed
+//               in its list's canonical order and stored per row, one sequential stream;
+//   2. integrate a pass, in place, over the particles that must move this step (their state prefetched
+//               a few ahead; a particle's force is the next row's when it is that row, else zero): leapfrog
 //               (kick-drift, symplectic, second order)
 //     v_{n+1/2} = v_{n-1/2} + dt a_n,   x_{n+1} = x_n + dt v_{n+1/2},   w_{n+1/2} = w_{n-1/2} + dt T_n / I,
 //               with a_n = F_n/m + a_ext(v_{n-1/2}).
@@ -16,7 +18,9 @@
 // formed for output all call it, so a particle moved in free flight over n steps gets exactly the n
 // kicks and drifts the integration pass would have given it, bit for bit.
 #include <algorithm>
+#include <bit>
 #include <cmath>
+#include <cstddef>
 #include <cstdint>
 #include <type_traits>
 
@@ -36,6 +40,7 @@ struct UniformDrive {
   V3 accel{0, 0, 0};
   double drag_rate = 0;  // 1/s
   inline V3 operator()(std::size_t, V3 v) const { return accel - drag_rate * v; }
+  std::nullptr_t prefetch_base() const { return nullptr; }  // nothing per particle to prefetch
 };
 
 /// Per-particle external acceleration, constant over the DEM sub-steps of a fluid step (coupled runs:
@@ -43,6 +48,7 @@ struct UniformDrive {
 struct PerParticleDrive {
   const double* accel = nullptr;  // 3 per owned particle
   inline V3 operator()(std::size_t i, V3) const { return load3(accel + 3 * i); }
+  const double* prefetch_base() const { return accel; }
 };
 
 struct KernelStats {
@@ -76,8 +82,9 @@ inline double kick_drift(std::size_t i, double* x, double* v, V3 f, const Drive&
 inline V3 kicked_spin(V3 w, V3 torque, const KernelConstants& k) { return w + (k.dt * k.inv_inertia) * torque; }
 
 /// Pass 1: the force (and torque) on each particle of `rows` (particles with a non-empty list) from its
-/// list, in the list's order, into force[3 i..] (torque[3 i..] with friction). Updates the tangential
-/// histories and the overlap statistics.
+/// list, in the list's order, into force[3 r..] (torque[3 r..] with friction) for row r: the forces are
+/// stored per row, a sequential stream, not per particle. Updates the tangential histories and the
+/// overlap statistics.
 template <class Contact>
 void compute_forces(const Particles& p, NeighborList& list, const Contact& contact, const KernelConstants& k,
                     const std::int32_t* rows, std::size_t n_rows, double* __restrict force,
@@ -93,28 +100,36 @@ void compute_forces(const Particles& p, NeighborList& list, const Contact& conta
   // prefetch distance in list entries: entries are contiguous over rows (CSR), so the look-ahead runs
   // on into the next particles' lists
   constexpr std::int64_t kAhead = 8;
+  constexpr std::size_t kRowAhead = 4;
   for (std::size_t r = 0; r < n_rows; ++r) {
     const std::size_t i = static_cast<std::size_t>(rows[r]);
-    const V3 xi = load3(x + 3 * i), vi = load3(v + 3 * i);
+    if (r + kRowAhead < n_rows) {
+      const std::size_t ia = 3 * static_cast<std::size_t>(rows[r + kRowAhead]);
+      __builtin_prefetch(x + ia);
+      __builtin_prefetch(x + ia + 2);
+    }
+    const V3 xi = load3(x + 3 * i);
     V3 f{0, 0, 0};
     V3 torque{0, 0, 0};
-    V3 wi{0, 0, 0};
-    if constexpr (kFriction) wi = load3(w + 3 * i);
     const std::int64_t k0 = offset[i], k1 = offset[i + 1];
     for (std::int64_t e = k0; e < k1; ++e) {
       if (e + kAhead < n_entries) {
+        // the partner's position only: its velocity and spin are needed where it touches, which few do
         const std::int32_t jn = index[e + kAhead];
         __builtin_prefetch(x + 3 * jn);
-        __builtin_prefetch(v + 3 * jn);
-        if constexpr (kFriction) __builtin_prefetch(w + 3 * jn);
+        __builtin_prefetch(x + 3 * jn + 2);
       }
       const std::int32_t j = index[e];
       const V3 dx = xi - load3(x + 3 * j);
       const double r2 = dot(dx, dx);
       if (r2 >= contact_dist2) {
         if constexpr (kFriction) {
+          // contact ended: its history goes with it. Written only where it is not +0.0 already (bit
+          // pattern: a -0.0 becomes +0.0 as before), so that the entries that never touch are only read.
           double* s = &list.xi[3 * e];
-          s[0] = s[1] = s[2] = 0.0;  // contact ended: its history goes with it
+          if ((std::bit_cast<std::uint64_t>(s[0]) | std::bit_cast<std::uint64_t>(s[1]) |
+               std::bit_cast<std::uint64_t>(s[2])) != 0)
+            s[0] = s[1] = s[2] = 0.0;
         }
         continue;
       }
@@ -125,31 +140,55 @@ void compute_forces(const Particles& p, NeighborList& list, const Contact& conta
         st.overlap_particle = p.id[i];
         st.overlap_partner = p.id[j];
       }
-      const V3 dv = vi - load3(v + 3 * j);
+      // the row's own velocity and spin only where it touches (most rows touch nothing)
+      const V3 dv = load3(v + 3 * i) - load3(v + 3 * j);
       if constexpr (kFriction) {
-        f = f + contact.force(dx, rr, overlap, dv, wi, load3(w + 3 * j), k.radius, k.radius, &list.xi[3 * e], torque);
+        f = f + contact.force(dx, rr, overlap, dv, load3(w + 3 * i), load3(w + 3 * j), k.radius, k.radius, &list.xi[3 * e], torque);
       } else {
         f = f + contact.normal_force(dx, rr, overlap, dv);
       }
     }
-    store3(force + 3 * i, f);
-    if constexpr (kFriction) store3(torque_out + 3 * i, torque);
+    store3(force + 3 * r, f);
+    if constexpr (kFriction) store3(torque_out + 3 * r, torque);
   }
 }
 
-/// Pass 2: kick and drift the particles of `idx` in place from their stored forces (zero for a
-/// particle whose list is empty) and the drive; spins from the stored torques. Records the largest
-/// speed and the first non-finite velocity.
+/// Pass 2: kick and drift the particles of `idx` in place from the forces of pass 1 (per row: `rows`, a
+/// subsequence of `idx`, both increasing; zero for a particle whose list is empty) and the drive; spins
+/// from the torques. Records the largest speed and the first non-finite velocity.
 template <class Drive>
 void integrate(Particles& p, const double* __restrict force, const double* __restrict torque, const Drive& drive,
-               const KernelConstants& k, const std::int32_t* idx, std::size_t n, KernelStats& st) {
+               const KernelConstants& k, const std::int32_t* idx, std::size_t n, const std::int32_t* rows,
+               std::size_t n_rows, KernelStats& st) {
   double* __restrict x = p.x.data();
   double* __restrict v = p.v.data();
   double* __restrict w = p.rotation ? p.w.data() : nullptr;
+  const V3 zero{0, 0, 0};
+  constexpr std::size_t kAhead = 8;
+  std::size_t r = 0;
   for (std::size_t m = 0; m < n; ++m) {
     const std::size_t i = static_cast<std::size_t>(idx[m]);
-    const double s2 = kick_drift(i, x + 3 * i, v + 3 * i, load3(force + 3 * i), drive, k);
-    if (w) store3(w + 3 * i, kicked_spin(load3(w + 3 * i), load3(torque + 3 * i), k));
+    if (m + kAhead < n) {  // the state of a particle a few ahead (both ends of its 24 bytes)
+      const std::size_t ia = 3 * static_cast<std::size_t>(idx[m + kAhead]);
+      __builtin_prefetch(x + ia);
+      __builtin_prefetch(x + ia + 2);
+      __builtin_prefetch(v + ia);
+      __builtin_prefetch(v + ia + 2);
+      if constexpr (!std::is_same_v<decltype(drive.prefetch_base()), std::nullptr_t>) {
+        __builtin_prefetch(drive.prefetch_base() + ia);
+        __builtin_prefetch(drive.prefetch_base() + ia + 2);
+      }
+      if (w) {
+        __builtin_prefetch(w + ia);
+        __builtin_prefetch(w + ia + 2);
+      }
+    }
+    // a particle without a list has no force: the zero the force array used to hold for it
+    const bool has_force = r < n_rows && static_cast<std::size_t>(rows[r]) == i;
+    const V3 f = has_force ? load3(force + 3 * r) : zero;
+    const double s2 = kick_drift(i, x + 3 * i, v + 3 * i, f, drive, k);
+    if (w) store3(w + 3 * i, kicked_spin(load3(w + 3 * i), has_force ? load3(torque + 3 * r) : zero, k));
+    r += has_force;
     if (!(s2 <= st.max_speed2)) {  // also true for NaN
       if (!std::isfinite(s2) && st.bad_particle < 0) st.bad_particle = p.id[i];
       st.max_speed2 = std::isfinite(st.max_speed2) ? s2 : st.max_speed2;

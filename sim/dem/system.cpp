@@ -153,8 +153,8 @@ void DemSystem::classify(const NeighborList* list) {
     ghosts_.restrict_forward(referenced_);  // flags the owned sources of referenced ghosts (any rank)
   }
   referenced_.resize(n);
-  force_.assign(3 * n, 0.0);
-  if (p_.rotation) torque_.assign(3 * n, 0.0);
+  force_.assign(3 * force_rows_.size(), 0.0);  // per row (integrator.hpp)
+  if (p_.rotation) torque_.assign(3 * force_rows_.size(), 0.0);
   dormant_.clear();
   integrate_.clear();
   selection_due_ = true;
@@ -303,7 +303,8 @@ void DemSystem::commit() {
   {
     ScopedPhase t(timers_, t_force_);
     with_drive([&](const auto& drive) {
-      integrate(p_, force_.data(), torque_.data(), drive, kc_, integrate_.data(), integrate_.size(), last_stats_);
+      integrate(p_, force_.data(), torque_.data(), drive, kc_, integrate_.data(), integrate_.size(),
+                force_rows_.data(), force_rows_.size(), last_stats_);
     });
   }
   const double time_s = static_cast<double>(step_) * s_.dt_s;
@@ -414,9 +415,14 @@ Diagnostics DemSystem::diagnostics(bool synchronous) const {
 std::vector<double> DemSystem::next_velocity() const {
   catch_up();
   std::vector<double> out(3 * p_.n_owned);
+  const V3 zero{0, 0, 0};
   with_drive([&](const auto& drive) {
-    for (std::size_t i = 0; i < p_.n_owned; ++i)
-      store3(&out[3 * i], kicked_velocity(i, load3(&p_.v[3 * i]), load3(&force_[3 * i]), drive, kc_));
+    std::size_t r = 0;  // forces are stored per row (force_rows_, increasing)
+    for (std::size_t i = 0; i < p_.n_owned; ++i) {
+      const bool has_force = r < force_rows_.size() && static_cast<std::size_t>(force_rows_[r]) == i;
+      store3(&out[3 * i], kicked_velocity(i, load3(&p_.v[3 * i]), has_force ? load3(&force_[3 * r]) : zero, drive, kc_));
+      r += has_force;
+    }
   });
   return out;
 }
@@ -426,8 +432,13 @@ std::vector<double> DemSystem::next_angular_velocity() const {
   if (!p_.rotation) return out;
   catch_up();
   out.resize(3 * p_.n_owned);
-  for (std::size_t i = 0; i < p_.n_owned; ++i)
-    store3(&out[3 * i], kicked_spin(load3(&p_.w[3 * i]), load3(&torque_[3 * i]), kc_));
+  const V3 zero{0, 0, 0};
+  std::size_t r = 0;  // torques are stored per row (force_rows_, increasing)
+  for (std::size_t i = 0; i < p_.n_owned; ++i) {
+    const bool has_force = r < force_rows_.size() && static_cast<std::size_t>(force_rows_[r]) == i;
+    store3(&out[3 * i], kicked_spin(load3(&p_.w[3 * i]), has_force ? load3(&torque_[3 * r]) : zero, kc_));
+    r += has_force;
+  }
   return out;
 }
 

@@ -159,7 +159,7 @@ class DemSystem {
   // the split step (integrator.hpp): forces of the particles with neighbours, stored between advance()
   // and commit(), zero for the others; free flight
   static constexpr std::int64_t kHorizon = 100;      // steps a selection of candidates holds
-  std::vector<double> force_, torque_;               // 3 per owned particle
+  std::vector<double> force_, torque_;               // 3 per row of force_rows_ (not per particle)
   std::vector<std::int32_t> force_rows_;             // owned particles with a non-empty list
   std::vector<char> referenced_;                     // per owned: a list (any rank) refers to it or has one
   std::vector<std::int32_t> integrate_;              // integrated every step (increasing)
