@@ -1,5 +1,5 @@
 #pragma once
-// Slab decomposition along y (design.md "Parallel runs") and the ghost-particle exchange.
+// Slab decomposition along y (ARCHITECTURE.md "Parallel decomposition") and the ghost-particle exchange.
 // Every rank owns the particles whose y lies in [y_lo, y_hi). Ghosts are built in three stages,
 // x, z, then y, each stage taking as candidates everything that exists before it (owned + earlier
 // ghosts), so edge and corner images come out right. x and z are always local periodic images; y goes

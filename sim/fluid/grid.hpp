@@ -1,5 +1,5 @@
 #pragma once
-// The fluid's periodic uniform grid and this rank's slab of it (design.md "Parallel runs").
+// The fluid's periodic uniform grid and this rank's slab of it (ARCHITECTURE.md "Parallel decomposition").
 //
 // Cells (i, j, k) along (x, y, z), y vertical. The slabs are FFTW-MPI's blocks of the first array
 // dimension, which is y: fields are stored with y slowest, index (j, k, i), x fastest, so every rank's

@@ -132,7 +132,7 @@ struct FlowAverages {
   double kinetic_energy_J = 0.0;            // sum 1/2 rho_f eps_f u_d^2 V_cell over all faces
 };
 
-/// This rank's slab in the file order of the snapshot schema (design.md "Files"): (n_z, ny_local, n_x),
+/// This rank's slab in the file order of the snapshot schema (docs/schema-run.md "Snapshot"): (n_z, ny_local, n_x),
 /// x fastest; velocity at cell centres (mean of the two faces) with a trailing 3.
 /// eps_velocity: cell-centred eps u, the mean of the two faces' eps_f u_f (eps_f = mean of the two
 /// cells), so sum over cells = the solver's face sum (FlowAverages::eps_velocity) exactly.
