@@ -25,6 +25,17 @@ namespace fs = std::filesystem;
 
 namespace {
 
+/// A duration for a progress line, rounded as a person reads it: "0.42 s", "12 s", "3.5 min", "1.3 h".
+std::string rounded_duration(double s) {
+  char buf[32];
+  if (!(s >= 0) || !std::isfinite(s)) return "-";
+  if (s < 10) std::snprintf(buf, sizeof buf, "%.1f s", s);
+  else if (s < 120) std::snprintf(buf, sizeof buf, "%.0f s", s);
+  else if (s < 7200) std::snprintf(buf, sizeof buf, "%.1f min", s / 60);
+  else std::snprintf(buf, sizeof buf, "%.1f h", s / 3600);
+  return buf;
+}
+
 constexpr int kSumFields = 5;  // count, numerator, micro, slip, phi
 
 /// An error on some ranks only must end the job on all of them (no rank left waiting in a
@@ -524,8 +535,8 @@ std::size_t run_filter(const FilterOptions& o, MPI_Comm comm) {
         if (rank == 0 && !o.quiet && (t - last_print > 2.0 || done == mine)) {
           const double per = (t - t_start) / static_cast<double>(done);
           std::cerr << "cgd-filter: " << done << "/" << mine << " snapshots of rank 0 (" << plan.runs[r].path << ", t = "
-                    << plan.runs[r].times_s[i] << " s), " << per << " s each, ETA "
-                    << per * static_cast<double>(mine - done) << " s\n";
+                    << plan.runs[r].times_s[i] << " s), " << rounded_duration(per) << " each, ETA "
+                    << rounded_duration(per * static_cast<double>(mine - done)) << "\n";
           last_print = t;
         }
       }

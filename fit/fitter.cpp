@@ -767,6 +767,8 @@ void cross_validate(const std::vector<FilteredFile>& files, const FitOptions& o,
       CrossValidationRun cv;
       cv.file = files[f].path;
       cv.run = run;
+      if (run >= 0 && static_cast<std::size_t>(run) < files[f].run_paths.size())
+        cv.run_path = files[f].run_paths[static_cast<std::size_t>(run)];
       std::vector<BinEstimate> tb = fit_bins(files, tr, o);
       int n_used = 0;
       for (const BinEstimate& b : tb) n_used += b.used;

@@ -87,6 +87,7 @@ struct WidthResiduals {
 struct CrossValidationRun {
   std::string file;
   std::int64_t run = 0;
+  std::string run_path;  // the resolved run's directory (/runs/paths): names it by its <phi> and seed
   int points = 0;
   double rms = 0, mean = 0;  // of H_run - H_model(fit without this run)
 };

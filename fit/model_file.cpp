@@ -444,7 +444,7 @@ std::string fit_report(const FitResult& R, const std::vector<FilteredFile>& file
     out << "\nleave-one-run-out cross-validation of H: rms " << format("%.4f", R.cv_rms)
         << " (in-sample rms on the same points " << format("%.4f", R.cv_in_sample_rms) << ")\n";
     for (const CrossValidationRun& c : R.cv_runs)
-      out << "  " << c.file << " run " << c.run << ": " << c.points << " points, rms "
+      out << "  " << c.file << " run " << c.run << (c.run_path.empty() ? "" : " (" + c.run_path + ")") << ": " << c.points << " points, rms "
           << format("%.4f", c.rms) << ", mean " << format("%+.4f", c.mean) << "\n";
   }
   out << "\nrange: splines on [phi_crit, phi_max] = [" << R.model.phi_crit << ", "

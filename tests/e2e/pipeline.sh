@@ -69,6 +69,12 @@ for p in sys.argv[1:]:
     assert a["width_exponent_fitted"] == 1 and a["width_exponent_low"] <= a["width_exponent"] <= a["width_exponent_high"], p
     print("ok   %s: width_exponent %.3f [%.3f, %.3f]" % (p.split("/")[-1], a["width_exponent"], a["width_exponent_low"], a["width_exponent_high"]))
 ' "$tmp/out/fit/model.h5" "$tmp/out/fit/model_parcels.h5" || fail "width exponent not in the model files"
+# the fit report names each cross-validation run by its resolved run's directory (phi and seed), not only "run 1"
+# (the pipeline's fit above runs without cross-validation: one more fit of the same filtered file, with it)
+"$binary_dir/cgd-fit" "$tmp/out/filter/filtered.h5" --min-width-over-cell 1.4 --min-count 20 --bootstrap 0 \
+  -o "$tmp/cv.h5" >"$tmp/cv.report.txt" 2>&1
+grep -q "run [0-9] (.*generate/phi0.05_s2)" "$tmp/cv.report.txt" && echo "ok   CV runs named by their run" \
+  || { grep -A3 "cross-validation" "$tmp/cv.report.txt"; fail "the fit report's cross-validation runs are not named by their run directory"; }
 grep -q "==== cgd pipeline" "$tmp/make1.log" && echo "ok   pipeline complete, summary printed" || fail "no summary"
 make -f Makefile.pipeline -q "${vars[@]}" WIDTHS=3.34,5,6.67,10 all; q=$?
 [ $q -eq 0 ] && echo "ok   make -q after a complete make: nothing to do" || fail "make -q exit status $q after a complete make"
