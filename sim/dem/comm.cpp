@@ -54,6 +54,27 @@ std::int64_t double_to_bits(double d) {
   std::memcpy(&i, &d, sizeof i);
   return i;
 }
+/// A ghost whose source is on this rank (a local swap): ghost g = particle i shifted by the periodic image,
+/// the same arithmetic as pack_one followed by unpack_one.
+inline void copy_local_ghost(Particles& p, const std::array<double, 3>& shift, std::size_t g, std::size_t i) {
+  p.x[3 * g] = p.x[3 * i] + shift[0];
+  p.x[3 * g + 1] = p.x[3 * i + 1] + shift[1];
+  p.x[3 * g + 2] = p.x[3 * i + 2] + shift[2];
+  p.v[3 * g] = p.v[3 * i];
+  p.v[3 * g + 1] = p.v[3 * i + 1];
+  p.v[3 * g + 2] = p.v[3 * i + 2];
+  if (p.rotation) {
+    p.w[3 * g] = p.w[3 * i];
+    p.w[3 * g + 1] = p.w[3 * i + 1];
+    p.w[3 * g + 2] = p.w[3 * i + 2];
+  }
+}
+/// Ghost g from one received forward record (pack_one's layout).
+inline void unpack_one(Particles& p, std::size_t g, const double* in) {
+  std::memcpy(&p.x[3 * g], in, 3 * sizeof(double));
+  std::memcpy(&p.v[3 * g], in + 3, 3 * sizeof(double));
+  if (p.rotation) std::memcpy(&p.w[3 * g], in + 6, 3 * sizeof(double));
+}
 /// One particle's forward record: position shifted by the swap's periodic image, velocity, and the angular
 /// velocity when rotation is simulated (6 or 9 doubles).
 inline void pack_one(const Particles& p, std::int32_t i, const std::array<double, 3>& shift, double* out) {
@@ -194,9 +215,7 @@ void GhostExchange::build(Particles& p, double cutoff) {
       }
       for (std::size_t k = 0; k < last.recv_count; ++k, in += per) {
         const std::size_t g = last.recv_first + k;
-        std::memcpy(&p.x[3 * g], in, 3 * sizeof(double));
-        std::memcpy(&p.v[3 * g], in + 3, 3 * sizeof(double));
-        if (p.rotation) std::memcpy(&p.w[3 * g], in + 6, 3 * sizeof(double));
+        unpack_one(p, g, in);
       }
     }
   }
@@ -210,17 +229,7 @@ void GhostExchange::forward(Particles& p) {
       if (s.local) {
         for (std::int32_t k : s.live_recv) {
           const std::size_t g = s.recv_first + static_cast<std::size_t>(k), i = static_cast<std::size_t>(s.send[k]);
-          p.x[3 * g] = p.x[3 * i] + s.shift[0];
-          p.x[3 * g + 1] = p.x[3 * i + 1] + s.shift[1];
-          p.x[3 * g + 2] = p.x[3 * i + 2] + s.shift[2];
-          p.v[3 * g] = p.v[3 * i];
-          p.v[3 * g + 1] = p.v[3 * i + 1];
-          p.v[3 * g + 2] = p.v[3 * i + 2];
-          if (p.rotation) {
-            p.w[3 * g] = p.w[3 * i];
-            p.w[3 * g + 1] = p.w[3 * i + 1];
-            p.w[3 * g + 2] = p.w[3 * i + 2];
-          }
+          copy_local_ghost(p, s.shift, g, i);
         }
         continue;
       }
@@ -232,9 +241,7 @@ void GhostExchange::forward(Particles& p) {
       const double* in = recv_buf_.data();
       for (std::int32_t k : s.live_recv) {
         const std::size_t g = s.recv_first + static_cast<std::size_t>(k);
-        std::memcpy(&p.x[3 * g], in, 3 * sizeof(double));
-        std::memcpy(&p.v[3 * g], in + 3, 3 * sizeof(double));
-        if (p.rotation) std::memcpy(&p.w[3 * g], in + 6, 3 * sizeof(double));
+        unpack_one(p, g, in);
         in += per;
       }
     }
@@ -245,17 +252,7 @@ void GhostExchange::forward(Particles& p) {
       // direct copy: ghost k is source s.send[k] shifted
       for (std::size_t k = 0; k < s.recv_count; ++k) {
         const std::size_t g = s.recv_first + k, i = static_cast<std::size_t>(s.send[k]);
-        p.x[3 * g] = p.x[3 * i] + s.shift[0];
-        p.x[3 * g + 1] = p.x[3 * i + 1] + s.shift[1];
-        p.x[3 * g + 2] = p.x[3 * i + 2] + s.shift[2];
-        p.v[3 * g] = p.v[3 * i];
-        p.v[3 * g + 1] = p.v[3 * i + 1];
-        p.v[3 * g + 2] = p.v[3 * i + 2];
-        if (p.rotation) {
-          p.w[3 * g] = p.w[3 * i];
-          p.w[3 * g + 1] = p.w[3 * i + 1];
-          p.w[3 * g + 2] = p.w[3 * i + 2];
-        }
+        copy_local_ghost(p, s.shift, g, i);
       }
       continue;
     }
@@ -267,9 +264,7 @@ void GhostExchange::forward(Particles& p) {
     const double* in = recv_buf_.data();
     for (std::size_t k = 0; k < s.recv_count; ++k, in += per) {
       const std::size_t g = s.recv_first + k;
-      std::memcpy(&p.x[3 * g], in, 3 * sizeof(double));
-      std::memcpy(&p.v[3 * g], in + 3, 3 * sizeof(double));
-      if (p.rotation) std::memcpy(&p.w[3 * g], in + 6, 3 * sizeof(double));
+      unpack_one(p, g, in);
     }
   }
 }
