@@ -2,12 +2,7 @@
 # e2e (issue 19): the example scene cgd-coarse --help names is one cgd-coarse runs (it named a dry scene it refuses):
 # the scene of "e.g. data/scenes/<name>.toml" run for a fraction of a t_ref in a small box exits 0 with a summary.
 # Environment (set by CTest): CGD_SOURCE_DIR, CGD_BINARY_DIR.
-set -u
-source_dir=${CGD_SOURCE_DIR:-$(cd "$(dirname "$0")/../.." && pwd)}
-binary_dir=${CGD_BINARY_DIR:-$source_dir/build}
-cd "$source_dir" || exit 1
-tmp=$(mktemp -d)
-trap 'rm -rf "$tmp"' EXIT
+source "$(dirname "$0")/lib/prologue.sh"
 export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1
 scene=$("$binary_dir/cgd-coarse" --help 2>&1 | grep -o 'e\.g\. data/scenes/[A-Za-z0-9_]*\.toml' | head -n 1 | cut -c6-)
 [ -n "$scene" ] && [ -f "$scene" ] || { echo "FAIL cgd-coarse --help names no existing example scene ('$scene')"; exit 1; }

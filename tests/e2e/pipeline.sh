@@ -6,14 +6,7 @@
 # a model run the parcel fit leaves unchanged is the modelraw run reused; `make -q` right after reports nothing to
 # do; changing WIDTHS reruns exactly the filter and what depends on it (the resolved run's files keep their times).
 # Environment (set by CTest): CGD_SOURCE_DIR, CGD_BINARY_DIR.
-set -u
-source_dir=${CGD_SOURCE_DIR:-$(cd "$(dirname "$0")/../.." && pwd)}
-binary_dir=${CGD_BINARY_DIR:-$source_dir/build}
-cd "$source_dir" || exit 1
-tmp=$(mktemp -d)
-trap 'rm -rf "$tmp"' EXIT
-failures=0
-fail() { echo "FAIL $*"; failures=$((failures + 1)); }
+source "$(dirname "$0")/lib/prologue.sh"
 vars=(OUT="$tmp/out" BUILD="$binary_dir" PHIS=0.05 BOX_DP=20 FROM_TREF=0.5 BINS=0.005
       "GENERATE_SET=domain.size_dp=[20,80,20] run.end_time_tref=2 run.dump_interval_tref=0.1 run.sampling_start_tref=0.5"
       "COARSE_SET=domain.size_dp=[20,80,20] run.end_time_tref=2 run.sampling_start_tref=0.5"

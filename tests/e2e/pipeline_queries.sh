@@ -9,15 +9,7 @@
 # start (an unknown scene key) gives the complete run it was to replace back, and make then keeps that run (its
 # own parameters are the ones asked) instead of running it again.
 # Environment (set by CTest): CGD_SOURCE_DIR, CGD_BINARY_DIR.
-set -u
-source_dir=${CGD_SOURCE_DIR:-$(cd "$(dirname "$0")/../.." && pwd)}
-binary_dir=${CGD_BINARY_DIR:-$source_dir/build}
-cd "$source_dir" || exit 1
-tmp=$(mktemp -d)
-trap 'rm -rf "$tmp"' EXIT
-failures=0
-fail() { echo "FAIL $*"; failures=$((failures + 1)); }
-ok() { echo "ok   $*"; }
+source "$(dirname "$0")/lib/prologue.sh"
 gen_set="domain.size_dp=[20,80,20] run.end_time_tref=1 run.dump_interval_tref=0.1 run.sampling_start_tref=0.5"
 vars=(OUT="$tmp/out" BUILD="$binary_dir" PROFILE=demo PHIS=0.05 BOX_DP=20 FROM_TREF=0.5 BINS=0.005 WIDTHS=3.34,5,6.67
       "GENERATE_SET=$gen_set" FILTER_GRIDS= COARSE_CELLS=4 ALPHAS=1,2 SEEDS=1 COARSE_DRAGS=micro,model)

@@ -7,14 +7,7 @@
 # resolved summaries (cgd-coarse --summarise) feeding the study; and the refusals (make errors) of an unknown drag
 # label, an EXTRA_RESOLVED entry outside PHIS, a perfect closure on a grid the filter did not evaluate, a bad seed.
 # Environment (set by CTest): CGD_SOURCE_DIR.
-set -u
-source_dir=${CGD_SOURCE_DIR:-$(cd "$(dirname "$0")/../.." && pwd)}
-cd "$source_dir" || exit 1
-tmp=$(mktemp -d)
-trap 'rm -rf "$tmp"' EXIT
-failures=0
-fail() { echo "FAIL $*"; failures=$((failures + 1)); }
-ok() { echo "ok   $*"; }
+source "$(dirname "$0")/lib/prologue.sh"
 mkdir -p "$tmp/bin"
 for t in cgd-generate cgd-filter cgd-fit cgd-coarse; do touch "$tmp/bin/$t"; done
 mk() { make -f Makefile.pipeline -n BUILD="$tmp/bin" OUT="$tmp/out" "$@" 2>&1; }
