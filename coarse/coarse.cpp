@@ -41,7 +41,7 @@ void check_coarse_scene(const Scene& s, int ranks) {
                      std::to_string(kMinimumParcels) + "); use smaller parcels, a larger box or a higher solids fraction");
   // the slabs along y are whole rows of cells (FFTW-MPI blocks): the thinnest has floor(n_y/ranks) rows
   const double slab = std::floor(static_cast<double>(x.cells[1]) / ranks) * s.domain.size_m[1] / x.cells[1];
-  const double cutoff = x.parcel_diameter_m * (1.0 + s.contact.skin_over_dp);
+  const double cutoff = x.parcel_diameter_m * (1.0 + s.contact.smallest_skin_over_dp());
   if (s.has_contacts() && slab < cutoff)
     throw InputError(file + ": with " + std::to_string(ranks) + " ranks the thinnest slab along y is " +
                      num(slab / s.particles.diameter_m) + " d_p, thinner than the contact cutoff " +

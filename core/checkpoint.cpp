@@ -27,6 +27,7 @@ void write(const std::string& path, MPI_Comm comm, const Scene& scene, const Run
     file.set_attr("/", "time", state.time_s);
     file.set_attr("/", "displacement_bound", state.displacement_bound_m);
     file.set_attr("/", "rebuild_due", static_cast<std::int64_t>(state.rebuild_due));
+    file.set_attr("/", "skin", state.skin_m);
     file.set_attr("/", "last_sort_step", state.last_sort_step);
     file.set_attr("/", "ranks", static_cast<std::int64_t>(ranks));
     file.set_attr("/", "rank_particle_counts", counts);
@@ -64,6 +65,7 @@ Reader::Reader(const std::string& path, MPI_Comm comm) : file_(h5::File::open_re
   s.time_s = file_.attr_double("/", "time");
   s.displacement_bound_m = file_.attr_double("/", "displacement_bound");
   s.rebuild_due = file_.attr_int("/", "rebuild_due") != 0;
+  if (file_.has_attr("/", "skin")) s.skin_m = file_.attr_double("/", "skin");  // older checkpoints: none
   s.last_sort_step = file_.attr_int("/", "last_sort_step");
   s.neighbor_rebuilds = file_.attr_int("/", "neighbor_rebuilds");
   s.wall_seconds = file_.attr_double("/", "wall_seconds");

@@ -29,6 +29,7 @@ struct RunState {
   double time_s = 0;
   double displacement_bound_m = 0;  // bound on any particle's displacement since the last list build
   bool rebuild_due = false;         // the neighbour list must be rebuilt before the next step
+  double skin_m = 0;                // the list's skin (adaptive skin: the last build's; 0: not stored)
   std::int64_t last_sort_step = 0;  // step of the last reordering by cell
   std::int64_t neighbor_rebuilds = 0;
   double wall_seconds = 0;            // wall time of the whole run so far (all sessions)

@@ -78,7 +78,7 @@ void write_params(h5::File& f, const Scene& s) {
   f.set_attr(g, "friction", c.friction);
   f.set_attr(g, "kn_over_kt", c.kn_over_kt);
   f.set_attr(g, "gamman_over_gammat", c.gamman_over_gammat);
-  f.set_attr(g, "skin_over_dp", c.skin_over_dp);
+  if (c.skin_over_dp) f.set_attr(g, "skin_over_dp", *c.skin_over_dp);  // absent: adaptive
 
   // [fluid] (absent: dry granular run)
   if (s.fluid) {
@@ -114,6 +114,7 @@ void write_params(h5::File& f, const Scene& s) {
   f.set_attr(g, "viscous_safety", nm.viscous_safety);
   f.set_attr(g, "drag_safety", nm.drag_safety);
   f.set_attr(g, "sort_interval_steps", nm.sort_interval_steps);
+  f.set_attr(g, "skin_target_steps", nm.skin_target_steps);
 
   // derived scales
   const DerivedScales& d = s.derived;

@@ -147,7 +147,7 @@ ContactConfig read_contact(const SceneReader& in) {
   if (auto v = in.number("contact", "gamman_over_gammat"))
     c.gamman_over_gammat = in.positive("contact", "gamman_over_gammat", *v);
   if (auto v = in.number("contact", "skin_over_dp"))
-    c.skin_over_dp = in.non_negative("contact", "skin_over_dp", *v);
+    c.skin_over_dp = in.non_negative("contact", "skin_over_dp", *v);  // absent: adaptive (scene.hpp)
   if (c.model != ContactModel::None && !c.gamma_star && !c.stiffness_n_N_m)
     in.fail(std::string("contact.stiffness is missing: with contact.model = \"") + to_string(c.model) +
             "\" give contact.stiffness (N/m) or contact.gamma_star (dimensionless, needs a [fluid] section)");
@@ -290,6 +290,10 @@ NumericsConfig read_numerics(const SceneReader& in) {
   if (auto v = in.integer("numerics", "sort_interval_steps")) {
     if (*v < 1) in.fail_value("numerics", "sort_interval_steps", "must be an integer >= 1");
     nm.sort_interval_steps = *v;
+  }
+  if (auto v = in.integer("numerics", "skin_target_steps")) {
+    if (*v < 1) in.fail_value("numerics", "skin_target_steps", "must be an integer >= 1");
+    nm.skin_target_steps = *v;
   }
 
   return nm;
@@ -615,7 +619,10 @@ std::string describe_scene(const Scene& s) {
   if (s.has_contacts())
     row("contacts", std::string(to_string(s.contact.model)) + " (e = " + num(s.contact.restitution) +
                         ", t* = " + num(s.contact.t_star) + ", neighbour skin " +
-                        num(s.contact.skin_over_dp) + " d_p)");
+                        (s.contact.skin_over_dp ? num(*s.contact.skin_over_dp) + " d_p)"
+                                                : "adaptive, " + num(ContactConfig::kAdaptiveSkinMin) + "-" +
+                                                      num(ContactConfig::kAdaptiveSkinMax) + " d_p, lists of ~" +
+                                                      std::to_string(s.numerics.skin_target_steps) + " steps)"));
   else
     row("contacts", "none (no neighbour search)");
   if (s.has_friction())

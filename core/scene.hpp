@@ -40,7 +40,13 @@ struct ContactConfig {
   double friction = 0.1;             // Coulomb mu_pp; 0 switches off tangential history and rotation
   double kn_over_kt = 3.5;
   double gamman_over_gammat = 1.0;
-  double skin_over_dp = 0.15;        // Verlet skin, in primary diameters
+  // Verlet skin in parcel diameters. Given: fixed. Absent: adaptive (docs/models.md "Neighbour list"): at each
+  // list build the skin is set from the fastest particle so that the list lasts about
+  // numerics.skin_target_steps DEM steps, within [kAdaptiveSkinMin, kAdaptiveSkinMax] parcel diameters.
+  std::optional<double> skin_over_dp;
+  static constexpr double kAdaptiveSkinMin = 0.05, kAdaptiveSkinMax = 0.5;
+  /// The smallest skin a run uses (what the slab and ghost checks must allow).
+  double smallest_skin_over_dp() const { return skin_over_dp ? *skin_over_dp : kAdaptiveSkinMin; }
 };
 
 enum class Coupling { Quiescent, OneWay, TwoWay };
@@ -80,6 +86,7 @@ struct NumericsConfig {
   double viscous_safety = 0.8;             // fluid step <= this x AB2's explicit-viscosity limit (solver.hpp)
   double drag_safety = 0.5;                // fluid step x beta_max / rho_p <= this (explicit particle drag)
   std::int64_t sort_interval_steps = 1000; // DEM steps between reorderings of the particles by cell
+  std::int64_t skin_target_steps = 20;     // adaptive skin (contact.skin_over_dp absent): DEM steps a list lasts
 };
 
 /// Numbers derived from the scene, printed at start and stored in every output file (/params).

@@ -34,7 +34,7 @@ const std::vector<SectionSpec>& schema() {
         {"friction", Kind::Number, "Coulomb friction coefficient"},
         {"kn_over_kt", Kind::Number, "normal over tangential stiffness"},
         {"gamman_over_gammat", Kind::Number, "normal over tangential damping"},
-        {"skin_over_dp", Kind::Number, "Verlet neighbour skin in primary diameters"}}},
+        {"skin_over_dp", Kind::Number, "Verlet neighbour skin in parcel diameters (absent: adaptive)"}}},
       {"fluid",
        {{"density", Kind::Number, "kg/m^3, fluid density"},
         {"viscosity", Kind::Number, "Pa s, dynamic viscosity of the fluid"},
@@ -66,7 +66,8 @@ const std::vector<SectionSpec>& schema() {
         {"overlap_warning_fraction", Kind::Number, "fraction of overlap_limit at which the run warns once"},
         {"viscous_safety", Kind::Number, "fluid step over AB2's explicit-viscosity limit"},
         {"drag_safety", Kind::Number, "largest fluid step x beta_max / rho_p (explicit particle drag)"},
-        {"sort_interval_steps", Kind::Integer, "DEM steps between reorderings of the particles by cell"}}},
+        {"sort_interval_steps", Kind::Integer, "DEM steps between reorderings of the particles by cell"},
+        {"skin_target_steps", Kind::Integer, "adaptive skin: DEM steps a neighbour list lasts"}}},
   };
   return sections;
 }

@@ -114,7 +114,14 @@ dem::DemSettings dem_settings_from_scene(const Scene& scene) {
   s.contact.gamma_t = d.gamma_t_kg_s;
   s.contact.friction = scene.contact.friction;
   s.contact.dt = d.dt_dem_s;
-  s.skin_m = scene.contact.skin_over_dp * d.parcel_diameter_m;
+  if (scene.contact.skin_over_dp) {
+    s.skin_m = *scene.contact.skin_over_dp * d.parcel_diameter_m;
+  } else {  // adaptive (sim/dem/system.hpp DemSettings)
+    s.skin_target_steps = scene.numerics.skin_target_steps;
+    s.skin_min_m = ContactConfig::kAdaptiveSkinMin * d.parcel_diameter_m;
+    s.skin_max_m = ContactConfig::kAdaptiveSkinMax * d.parcel_diameter_m;
+    s.skin_m = s.skin_min_m;
+  }
   s.overlap_limit = scene.numerics.overlap_limit;
   s.sort_interval_steps = scene.numerics.sort_interval_steps;
   const Vec3& g = scene.domain.gravity_m_s2;

@@ -20,6 +20,7 @@ void write_run_checkpoint(const std::string& path, MPI_Comm comm, const Scene& s
   state.time_s = static_cast<double>(dem.step_index()) * dt_s;
   state.displacement_bound_m = dem.displacement_bound();
   state.rebuild_due = dem.rebuild_due();
+  state.skin_m = dem.skin();
   state.last_sort_step = dem.last_sort_step();
   state.neighbor_rebuilds = dem.rebuilds();
   state.wall_seconds = book.wall_seconds;
@@ -114,6 +115,7 @@ RestoredRun load_run_checkpoint(const std::string& path, MPI_Comm comm, const Sc
   dem.restore(std::move(store), state.displacement_bound_m, !same_layout || state.rebuild_due, step,
               state.last_sort_step);
   dem.set_rebuilds(state.neighbor_rebuilds);
+  if (state.skin_m > 0) dem.set_skin(state.skin_m);  // the bound is against the skin the list was built with
   RestoredRun out;
   out.step = step;
   out.book.wall_seconds = state.wall_seconds;

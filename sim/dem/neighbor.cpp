@@ -60,8 +60,17 @@ void NeighborList::build(const Particles& p, double cutoff, bool with_history) {
   }
   for (std::size_t c = 1; c < ncell; ++c) cell_start_[c + 1] += cell_start_[c];
   cell_items_.resize(p.n_total);
-  for (std::size_t i = p.n_total; i-- > 0;)
-    cell_items_[--cell_start_[cell_of_[i] + 1]] = static_cast<std::int32_t>(i);
+  // the positions too, in cell order (issue 17, third round): the candidate scan below then reads them as
+  // one stream per row of cells instead of one cache miss per candidate (the scan was 29 % of a developed
+  // Table 1 step, most of it on the candidate's position)
+  cell_x_.resize(3 * p.n_total);
+  for (std::size_t i = p.n_total; i-- > 0;) {
+    const std::int32_t k = --cell_start_[cell_of_[i] + 1];
+    cell_items_[k] = static_cast<std::int32_t>(i);
+    cell_x_[3 * k] = p.x[3 * i];
+    cell_x_[3 * k + 1] = p.x[3 * i + 1];
+    cell_x_[3 * k + 2] = p.x[3 * i + 2];
+  }
   cell_start_[ncell + 1] = static_cast<std::int32_t>(p.n_total);
   const std::int32_t* start = cell_start_.data() + 1;  // start[c] .. start[c + 1]: cell c
   const double cut2 = cutoff * cutoff;
@@ -80,10 +89,12 @@ void NeighborList::build(const Particles& p, double cutoff, bool with_history) {
       for (int y = std::max(cy - 1, 0); y <= std::min(cy + 1, g.n[1] - 1); ++y) {
         const int row = (z * g.n[1] + y) * g.n[0];
         for (std::int32_t k = start[row + x0], k1 = start[row + x1 + 1]; k < k1; ++k) {
-          const std::int32_t j = cell_items_[k];
-          const double* xj = &p.x[3 * j];
+          const double* xj = &cell_x_[3 * k];
           const double ddx = xi_[0] - xj[0], ddy = xi_[1] - xj[1], ddz = xi_[2] - xj[2];
-          if (ddx * ddx + ddy * ddy + ddz * ddz < cut2 && static_cast<std::size_t>(j) != i) index.push_back(j);
+          if (ddx * ddx + ddy * ddy + ddz * ddz < cut2) {
+            const std::int32_t j = cell_items_[k];
+            if (static_cast<std::size_t>(j) != i) index.push_back(j);
+          }
         }
       }
     }
@@ -144,7 +155,8 @@ void NeighborList::load_history(const Particles& p, const ContactStore& store) {
 std::size_t NeighborList::bytes() const {
   return offset.capacity() * sizeof(std::int64_t) + index.capacity() * sizeof(std::int32_t) +
          xi.capacity() * sizeof(double) +
-         (cell_start_.capacity() + cell_items_.capacity() + cell_of_.capacity()) * sizeof(std::int32_t);
+         (cell_start_.capacity() + cell_items_.capacity() + cell_of_.capacity()) * sizeof(std::int32_t) +
+         cell_x_.capacity() * sizeof(double);
 }
 
 std::vector<std::int32_t> spatial_order(const Particles& p, double cell_size) {

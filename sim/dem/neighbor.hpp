@@ -32,6 +32,7 @@ class NeighborList {
 
  private:
   std::vector<std::int32_t> cell_start_, cell_items_, cell_of_;
+  std::vector<double> cell_x_;  // positions in cell order (cell_items_'s), 3 per particle, rebuilt each build
 };
 
 /// Permutation that orders the owned particles by the cell they lie in (memory locality).

@@ -28,10 +28,21 @@ DemSystem::DemSystem(const DemSettings& settings, MPI_Comm comm)
   t_neigh_ = timers_.add("neighbor");
   t_comm_ = timers_.add("comm");
   t_force_ = timers_.add("force+integrate");
+  skin_m_ = skin_min_m_ = skin_max_m_ = s_.skin_m;
+  if (s_.skin_target_steps > 0) {
+    skin_min_m_ = s_.skin_min_m;
+    skin_max_m_ = std::max(s_.skin_min_m, s_.skin_max_m);
+    skin_m_ = std::clamp(s_.skin_m, skin_min_m_, skin_max_m_);
+  }
   if (s_.contacts) {
     // the thinnest slab of all ranks (uneven FFTW blocks): every rank decides alike (no rank left waiting)
     double slab = slabs_.y_hi() - slabs_.y_lo();
     MPI_Allreduce(MPI_IN_PLACE, &slab, 1, MPI_DOUBLE, MPI_MIN, slabs_.comm());
+    // an adaptive skin never outgrows the thinnest slab (ghosts come from the neighbouring rank only)
+    if (s_.skin_target_steps > 0 && slab - s_.diameter_m >= skin_min_m_) {
+      skin_max_m_ = std::min(skin_max_m_, slab - s_.diameter_m);
+      skin_m_ = std::min(skin_m_, skin_max_m_);
+    }
     if (slab < cutoff())
       throw InputError("too many MPI ranks (" + std::to_string(slabs_.size()) + ") for the box: each y-slab (the thinnest " +
                        std::to_string(slab) + " m) must be at least one contact cutoff (" +
@@ -96,6 +107,9 @@ void DemSystem::full_rebuild() {
   if (list_valid_ && p_.rotation) list_.save_history(p_, store_);
   for (std::size_t i = 0; i < p_.n_owned; ++i) slabs_.wrap(&p_.x[3 * i]);
   ghosts_.migrate(p_, store_);
+  if (s_.skin_target_steps > 0 && last_max_speed_ > 0)  // v_max: the same on every rank (one allreduce)
+    skin_m_ = std::clamp(2.0 * static_cast<double>(s_.skin_target_steps) * s_.dt_s * last_max_speed_, skin_min_m_,
+                         skin_max_m_);
   if (last_sort_step_ < 0 || step_ - last_sort_step_ >= s_.sort_interval_steps) {
     // Reorder owned particles by cell for memory locality. Results do not depend on the order.
     const std::vector<std::int32_t> order = spatial_order(p_, cutoff());
@@ -340,8 +354,9 @@ void DemSystem::commit() {
           << " %): contacts too soft for the impact speeds, or the time step too large for them";
     throw RunError(msg.str());
   }
-  displacement_bound_ += s_.dt_s * std::sqrt(global[0]);
-  if (2.0 * displacement_bound_ > s_.skin_m) rebuild_due_ = true;
+  last_max_speed_ = std::sqrt(global[0]);
+  displacement_bound_ += s_.dt_s * last_max_speed_;
+  if (2.0 * displacement_bound_ > skin_m_) rebuild_due_ = true;
 }
 
 Diagnostics DemSystem::diagnostics(bool synchronous) const {

@@ -22,6 +22,7 @@
 // the drag's contraction (select_free_flight).
 #include <mpi.h>
 
+#include <algorithm>
 #include <array>
 #include <cstdint>
 #include <vector>
@@ -43,7 +44,14 @@ struct DemSettings {
   bool contacts = true;
   bool friction = true;        // tangential history and rotation
   ContactParams contact;
-  double skin_m = 0;
+  double skin_m = 0;               // fixed skin; with skin_target_steps > 0 the first list's skin
+  // Adaptive skin (skin_target_steps > 0): at each full rebuild the skin is set to 2 v_max dt target steps
+  // (v_max the fastest particle's speed at the last step, the same on every rank), so that a list lasts about
+  // that many steps, clamped to [skin_min_m, skin_max_m] and to what the thinnest slab allows. The list only
+  // needs to hold every pair that can touch before the next rebuild; which extra pairs it holds and when it
+  // is rebuilt change no trajectory (neighbor.hpp), so the skin is free to follow the flow.
+  std::int64_t skin_target_steps = 0;
+  double skin_min_m = 0, skin_max_m = 0;
   UniformDrive drive;          // gravity/buoyancy and quiescent drag
   bool per_particle_drive = false;  // coupled runs: particles().a_ext replaces `drive`
   double overlap_limit = 0.25; // relative overlap (of the diameter) taken as a blow-up
@@ -125,7 +133,11 @@ class DemSystem {
   std::size_t integrated_particles() const { return integrate_.size(); }
   std::size_t ghosts() const { return ghosts_.ghosts(); }
   std::size_t bytes() const;
-  double cutoff() const { return s_.diameter_m + s_.skin_m; }
+  double cutoff() const { return s_.diameter_m + skin_m_; }
+  /// The skin of the current list (fixed, or the adaptive skin of the last build).
+  double skin() const { return skin_m_; }
+  /// Restart: the skin the checkpointed list was built with (its displacement bound is against it).
+  void set_skin(double skin_m) { skin_m_ = std::clamp(skin_m, skin_min_m_, skin_max_m_); }
 
   PhaseTimers& timers() { return timers_; }
   const PhaseTimers& timers() const { return timers_; }
@@ -155,6 +167,8 @@ class DemSystem {
   KernelStats last_stats_;
   std::int64_t step_ = 0, last_sort_step_ = -1, rebuilds_ = 0;
   double displacement_bound_ = 0, last_max_overlap_rel_ = 0;
+  double skin_m_ = 0, skin_min_m_ = 0, skin_max_m_ = 0;  // current skin; adaptive bounds (fixed: all equal)
+  double last_max_speed_ = 0;                            // fastest particle at the last step (all ranks)
   bool rebuild_due_ = true, list_valid_ = false;
   // the split step (integrator.hpp): forces of the particles with neighbours, stored between advance()
   // and commit(), zero for the others; free flight

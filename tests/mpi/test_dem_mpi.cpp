@@ -40,8 +40,14 @@ DemSettings frictional_gas_settings(const std::array<double, 3>& box, double d) 
 /// Run `steps` steps on `comm` from the placement; return id -> (x, v, w) gathered on rank 0.
 /// With all_on_rank0, rank 0 starts with every particle and the first rebuild's migration sends each to
 /// its owner: across two or more slab boundaries for the far slabs.
+/// Book of a run: neighbour-list rebuilds and the skin of the last list (the same on every rank).
+struct ListBook {
+  std::int64_t rebuilds = 0;
+  double skin_m = 0;
+};
+
 std::map<std::int64_t, std::array<double, 9>> run(MPI_Comm comm, const DemSettings& s, const cgd::dem::Placement& pl,
-                                                   int steps, bool all_on_rank0 = false) {
+                                                   int steps, bool all_on_rank0 = false, ListBook* book = nullptr) {
   DemSystem sys(s, comm);
   int rank = 0;
   MPI_Comm_rank(comm, &rank);
@@ -56,6 +62,7 @@ std::map<std::int64_t, std::array<double, 9>> run(MPI_Comm comm, const DemSettin
   }
   sys.set_particles(ids, x, v, {});
   for (int k = 0; k < steps; ++k) sys.step();
+  if (book) *book = {sys.rebuilds(), sys.skin()};
   const auto& p = sys.particles();
   std::vector<double> local;
   for (std::size_t i = 0; i < p.n_owned; ++i) {
@@ -143,6 +150,45 @@ TEST(DemMpi, UnevenSlabsAndLongMigrationsMatchSerialRunBitForBit) {
   for (const auto& [id, a] : serial)
     if (a != parallel.at(id)) ++differing;
   EXPECT_EQ(differing, 0) << "of " << n << " particles after 600 steps on " << size << " uneven slabs";
+}
+
+// The adaptive skin (sim/dem/system.hpp DemSettings::skin_target_steps): the skin follows the fastest
+// particle, a global maximum, so every rank takes the same skin and rebuilds at the same steps, and the run
+// on all ranks equals the serial one bit for bit, as with a fixed skin. (Against a fixed-skin run the
+// trajectories differ at round-off: positions are wrapped into the box at each rebuild, and x - L rounds
+// differently at another step; in this frictional gas the round-off then grows like any perturbation.)
+// The gas (0.5 m/s rms, its fastest particles ~1.5 m/s; dt = t_c/50 = 7.2e-7 s) asks for
+// 2 * 20 * dt * v_max ~ 0.5 d, so the adaptive run must rebuild less often than the fixed one (checked:
+// otherwise the skin would not have moved) and end with a skin inside its bounds.
+TEST(DemMpi, AdaptiveSkinMatchesSerialRunBitForBit) {
+  const double d = 75e-6;
+  const std::array<double, 3> box{12 * d, 24 * d, 12 * d};
+  const std::int64_t n = std::llround(0.3 * box[0] * box[1] * box[2] / (std::numbers::pi / 6.0 * d * d * d));
+  const cgd::dem::Placement pl = cgd::dem::place_particles(box, d, n, 0.5, 11);
+  const DemSettings fixed = frictional_gas_settings(box, d);
+  DemSettings adaptive = fixed;
+  adaptive.skin_target_steps = 20;
+  adaptive.skin_min_m = 0.05 * d;
+  adaptive.skin_max_m = 0.5 * d;
+  adaptive.skin_m = adaptive.skin_min_m;
+  ListBook parallel_book, serial_book, fixed_book;
+  const auto parallel = run(MPI_COMM_WORLD, adaptive, pl, 600, false, &parallel_book);
+  int rank = 0;
+  MPI_Comm_rank(MPI_COMM_WORLD, &rank);
+  if (rank != 0) return;
+  const auto serial = run(MPI_COMM_SELF, adaptive, pl, 600, false, &serial_book);
+  run(MPI_COMM_SELF, fixed, pl, 600, false, &fixed_book);
+  ASSERT_EQ(parallel.size(), static_cast<std::size_t>(n));
+  std::int64_t differing = 0;
+  for (const auto& [id, a] : serial)
+    if (a != parallel.at(id)) ++differing;
+  EXPECT_EQ(differing, 0) << "of " << n << " particles";
+  EXPECT_EQ(parallel_book.rebuilds, serial_book.rebuilds);
+  EXPECT_EQ(parallel_book.skin_m, serial_book.skin_m);
+  EXPECT_LT(serial_book.rebuilds, fixed_book.rebuilds) << "the adaptive skin should outgrow 0.15 d here";
+  EXPECT_GE(serial_book.skin_m, 0.05 * d);
+  EXPECT_LE(serial_book.skin_m, 0.5 * d);
+  EXPECT_NE(serial_book.skin_m, 0.15 * d);
 }
 
 }  // namespace
