@@ -40,7 +40,7 @@ struct ContactConfig {
   double friction = 0.1;             // Coulomb mu_pp; 0 switches off tangential history and rotation
   double kn_over_kt = 3.5;
   double gamman_over_gammat = 1.0;
-  // Verlet skin in parcel diameters. Given: fixed. Absent: adaptive (docs/models.md "Neighbour list"): at each
+  // Verlet skin in parcel diameters. Given: fixed. Absent: adaptive (docs/models.md "Contact law"): at each
   // list build the skin is set from the fastest particle so that the list lasts about
   // numerics.skin_target_steps DEM steps, within [kAdaptiveSkinMin, kAdaptiveSkinMax] parcel diameters.
   std::optional<double> skin_over_dp;
