@@ -111,9 +111,14 @@ std::vector<Series> observe(const std::vector<FilteredFile>& files, const Weight
   return out;
 }
 
+// A bin whose bootstrap interval has no width (all its samples in one block of snapshots: the demo's 7.5 d_p
+// grid at phi = 0.275, 178 samples, H_low = H_high to 1e-16) has no error estimate: left out, not weighted
+// by 1/sigma^2 = 1e32.
+constexpr double kMinSigma = 1e-6;
+
 bool usable(const Series& s, std::size_t b, double min_count) {
   return s.fitted && s.count[b] >= min_count && std::isfinite(s.H[b]) && std::isfinite(s.sigma[b]) &&
-         s.sigma[b] > 0.0;
+         s.sigma[b] > kMinSigma;
 }
 
 // ---- step 1: (h, log a) per bin -------------------------------------------------------------------------
@@ -270,6 +275,9 @@ std::vector<BinEstimate> fit_bins(const std::vector<FilteredFile>& files, const 
       continue;
     }
     fit_one_bin(pts, e);
+    e.x = pts.F;
+    e.H = pts.H;
+    e.sigma = pts.sigma;
     if (!std::isfinite(e.h) || !std::isfinite(e.se_h) || !(e.se_h > 0)) {
       e.dropped = "fit failed (singular)";
       continue;
@@ -370,19 +378,44 @@ struct Curves {
   SplineFit h, log_a;
 };
 
+/// The curves: log a(phi) smoothed over the bins' log a (weights 1/se^2), then h(phi) smoothed over each bin's
+/// h *at the smoothed a*: with a fixed to a(phi_b), the bin's h is the linear least-squares h of its points,
+/// h_b = sum w g H / sum w g^2 with g = 1/(1 + a x), w = 1/sigma^2, se = (sum w g^2)^-1/2 (docs/fit.md
+/// "Low phi"). Smoothing h_b and log a_b separately (before 2026-12-02) ignored that within a bin they trade
+/// off (only H = h g is measured): where a is weakly identified (low phi, a at its cap) the log a curve
+/// follows the neighbours while the bin's h kept the value that went with its own a, and the h curve's end
+/// coefficient, held by that bin alone, ran off: the demo's H at phi = 0.017 was 0.80 against a measured 0.02
+/// on the 7.5 d_p grid (coarse runs at <phi> = 0.02 +20 % in slip). Conditional on a, h_b is well identified
+/// wherever H is measured, and the curves reproduce the bins' H.
 Curves fit_curves(const std::vector<BinEstimate>& bins, double lo, double hi, int nbreak, double lambda_h,
                   double lambda_a) {
   std::vector<double> x, yh, wh, ya, wa;
   for (const BinEstimate& b : bins) {
     if (!b.used) continue;
     x.push_back(b.phi);
-    yh.push_back(b.h);
-    wh.push_back(1.0 / (b.se_h * b.se_h));
     ya.push_back(b.log_a);
     wa.push_back(1.0 / (b.se_log_a * b.se_log_a));
   }
   const Basis basis(lo, hi, nbreak);
-  return {pspline(basis, x, yh, wh, lambda_h), pspline(basis, x, ya, wa, lambda_a)};
+  SplineFit log_a = pspline(basis, x, ya, wa, lambda_a);
+  for (const BinEstimate& b : bins) {
+    if (!b.used) continue;
+    const double a = std::exp(std::clamp(log_a.spline(b.phi), kLogAMin, kLogAMax));
+    double sgh = 0, sgg = 0;
+    for (std::size_t i = 0; i < b.x.size(); ++i) {
+      const double g = 1.0 / (1.0 + a * b.x[i]), w = 1.0 / (b.sigma[i] * b.sigma[i]);
+      sgh += w * g * b.H[i];
+      sgg += w * g * g;
+    }
+    if (sgg > 0) {
+      yh.push_back(std::clamp(sgh / sgg, kHMin, kHMax));
+      wh.push_back(sgg);  // 1/se^2 of h at fixed a
+    } else {  // no points kept (a bin built without them): its own estimate
+      yh.push_back(b.h);
+      wh.push_back(1.0 / (b.se_h * b.se_h));
+    }
+  }
+  return {pspline(basis, x, yh, wh, lambda_h), std::move(log_a)};
 }
 
 /// Variance b(x)' C b(x) of a spline with coefficient covariance C at x (clamped into the knot range).

@@ -70,6 +70,9 @@ struct BinEstimate {
   // bootstrap standard deviations (over the replicates that fitted the bin): unlike se_h, se_log_a from
   // (J^T J)^-1 they include the correlation of the widths' errors (NaN without a bootstrap)
   double boot_se_h = NAN, boot_se_log_a = NAN;
+  // the points the bin's fit used (x = F^n, H, its sigma): the h curve is fitted to each bin's h at the
+  // smoothed a (fitter.cpp fit_curves), which needs them
+  std::vector<double> x, H, sigma;
 };
 
 /// Residual statistics of one width of one file (step 4).
