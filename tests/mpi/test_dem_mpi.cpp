@@ -37,6 +37,11 @@ DemSettings frictional_gas_settings(const std::array<double, 3>& box, double d) 
   return s;
 }
 
+/// Particles of diameter d filling `box` at solids fraction 0.3.
+std::int64_t gas_count(const std::array<double, 3>& box, double d) {
+  return std::llround(0.3 * box[0] * box[1] * box[2] / (std::numbers::pi / 6.0 * d * d * d));
+}
+
 /// Run `steps` steps on `comm` from the placement; return id -> (x, v, w) gathered on rank 0.
 /// With all_on_rank0, rank 0 starts with every particle and the first rebuild's migration sends each to
 /// its owner: across two or more slab boundaries for the far slabs.
@@ -98,7 +103,7 @@ TEST(DemMpi, SlabDecompositionMatchesSerialRunBitForBit) {
   // 12 x 24 x 12 d at solids fraction 0.3 with rms speed 0.5 m/s: many frictional contacts,
   // rebuilds and migrations in 1000 steps.
   const std::array<double, 3> box{12 * d, 24 * d, 12 * d};
-  const std::int64_t n = std::llround(0.3 * box[0] * box[1] * box[2] / (std::numbers::pi / 6.0 * d * d * d));
+  const std::int64_t n = gas_count(box, d);
   const cgd::dem::Placement pl = cgd::dem::place_particles(box, d, n, 0.5, 7);
   const DemSettings s = frictional_gas_settings(box, d);
   const auto parallel = run(MPI_COMM_WORLD, s, pl, 1000);
@@ -132,7 +137,7 @@ TEST(DemMpi, SlabDecompositionMatchesSerialRunBitForBit) {
 TEST(DemMpi, UnevenSlabsAndLongMigrationsMatchSerialRunBitForBit) {
   const double d = 75e-6;
   const std::array<double, 3> box{12 * d, 24 * d, 12 * d};
-  const std::int64_t n = std::llround(0.3 * box[0] * box[1] * box[2] / (std::numbers::pi / 6.0 * d * d * d));
+  const std::int64_t n = gas_count(box, d);
   const cgd::dem::Placement pl = cgd::dem::place_particles(box, d, n, 0.5, 11);
   int rank = 0, size = 1;
   MPI_Comm_rank(MPI_COMM_WORLD, &rank);
@@ -163,7 +168,7 @@ TEST(DemMpi, UnevenSlabsAndLongMigrationsMatchSerialRunBitForBit) {
 TEST(DemMpi, AdaptiveSkinMatchesSerialRunBitForBit) {
   const double d = 75e-6;
   const std::array<double, 3> box{12 * d, 24 * d, 12 * d};
-  const std::int64_t n = std::llround(0.3 * box[0] * box[1] * box[2] / (std::numbers::pi / 6.0 * d * d * d));
+  const std::int64_t n = gas_count(box, d);
   const cgd::dem::Placement pl = cgd::dem::place_particles(box, d, n, 0.5, 11);
   const DemSettings fixed = frictional_gas_settings(box, d);
   DemSettings adaptive = fixed;

@@ -256,7 +256,8 @@ const std::vector<DemoGrid> kDemoGrids = {
     {3, 0.4017960337894018, {-0.2828, 0.07438, 0.1697, 0.0605, 0.1491, 0.2367, 0.2982, 0.2949, 0.3075, 0.3428, 0.4697, 0.3794, 0.31, NAN, NAN, NAN}, {-0.3967, 0.05342, 0.1513, 0.02163, 0.1171, 0.1984, 0.277, 0.2466, 0.2355, 0.1471, 0.4213, 0.3794, 0.31, NAN, NAN, NAN}, {-0.2051, 0.09438, 0.1895, 0.09265, 0.1807, 0.2713, 0.3206, 0.3518, 0.4073, 0.6009, 0.6211, 0.3794, 0.31, NAN, NAN, NAN}, {0.009569, 0.01766, 0.02346, 0.036, 0.04612, 0.05431, 0.06437, 0.07412, 0.08384, 0.09389, 0.1041, 0.1145, 0.1214, NAN, NAN, NAN}, {82, 108640, 181465, 62690, 208473, 257893, 129948, 55891, 15928, 2777, 869, 376, 66, 0, 0, 0}},
 };
 
-TEST(Fit, LowPhiOnTheDemoGridsKeepsTheCorrection) {
+/// The demo grids above as the filtered file cgd-fit reads.
+FilteredFile demo_grids_file() {
   FilteredFile f;
   f.path = "demo_grids";
   f.physics = {cgd::DragLaw::Beetstra, 0.2185, 0.0003013470253420513, 75e-6, 1500.0, 1.3, 1.8e-5,
@@ -278,6 +279,11 @@ TEST(Fit, LowPhiOnTheDemoGridsKeepsTheCorrection) {
     w.count = g.count;
     f.grids.push_back(w);
   }
+  return f;
+}
+
+TEST(Fit, LowPhiOnTheDemoGridsKeepsTheCorrection) {
+  const FilteredFile f = demo_grids_file();
   FitOptions o;
   o.min_width_over_cell = 1.01;
   const FitResult r = fit({f}, "grid", o);
@@ -299,27 +305,7 @@ TEST(Fit, LowPhiOnTheDemoGridsKeepsTheCorrection) {
 // within 0.05 of the measured H on every grid (the data's 95 % intervals are +-0.01-0.03 there; 0.05 leaves
 // the smoothing its due; the old fit misses by up to 0.29).
 TEST(Fit, LowPhiModelReproducesTheBinsH) {
-  FilteredFile f;
-  f.path = "demo_grids";
-  f.physics = {cgd::DragLaw::Beetstra, 0.2185, 0.0003013470253420513, 75e-6, 1500.0, 1.3, 1.8e-5,
-               cgd::gravity_from_scales(0.2185, 0.0003013470253420513, 75e-6)};
-  for (int b = 0; b <= 16; ++b) f.phi_edges.push_back(0.01 * b);
-  f.run_paths = {"demo/phi0.02", "demo/phi0.05"};
-  for (const DemoGrid& g : kDemoGrids) {
-    WidthSeries w;
-    w.group = "/grids/" + std::to_string(g.across);
-    w.grid = true;
-    w.cells_across = g.across;
-    w.F = g.F;
-    w.width_m = f.physics.l_char_m / g.F;
-    w.width_over_cell = 9.0 / g.across;
-    w.H = g.H;
-    w.H_low = g.lo;
-    w.H_high = g.hi;
-    w.phi_mean = g.phi;
-    w.count = g.count;
-    f.grids.push_back(w);
-  }
+  const FilteredFile f = demo_grids_file();
   {
     FitOptions o;
     o.min_width_over_cell = 1.01;
