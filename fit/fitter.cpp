@@ -146,6 +146,21 @@ int residual_df(const gsl_vector* x, void* data, gsl_matrix* J) {
   return GSL_SUCCESS;
 }
 
+/// The weighted least-squares h of points (x, H, sigma) with a held fixed: H = h g, g = 1/(1 + a x), so
+/// h = sum w g H / sum w g^2 (w = 1/sigma^2), clamped to [kHMin, kHMax]. `sgg` receives sum w g^2, 1/se^2 of
+/// that h. Used by the per-bin fit's profile over a and by the h curve (fit_curves).
+double h_at_fixed_a(const std::vector<double>& x, const std::vector<double>& H, const std::vector<double>& sigma,
+                    double a, double& sgg) {
+  double sgh = 0;
+  sgg = 0;
+  for (std::size_t i = 0; i < x.size(); ++i) {
+    const double g = 1.0 / (1.0 + a * x[i]), w = 1.0 / (sigma[i] * sigma[i]);
+    sgh += w * g * H[i];
+    sgg += w * g * g;
+  }
+  return std::clamp(sgh / sgg, kHMin, kHMax);
+}
+
 /// Weighted least squares of H = h/(1 + a F) over one bin's points; returns h, log a, their standard
 /// errors from (J^T J)^-1 (residuals are already divided by sigma) and chi^2.
 void fit_one_bin(const BinPoints& pts, BinEstimate& out) {
@@ -155,13 +170,8 @@ void fit_one_bin(const BinPoints& pts, BinEstimate& out) {
   // log a in [log 1e-3, log 1e4], then a fine one around its best point.
   auto profile = [&](double t, double& h_out) {
     const double a = std::exp(t);
-    double sgh = 0, sgg = 0;
-    for (std::size_t i = 0; i < n; ++i) {
-      const double g = 1.0 / (1.0 + a * pts.F[i]), w = 1.0 / (pts.sigma[i] * pts.sigma[i]);
-      sgh += w * g * pts.H[i];
-      sgg += w * g * g;
-    }
-    h_out = std::clamp(sgh / sgg, kHMin, kHMax);
+    double sgg = 0;
+    h_out = h_at_fixed_a(pts.F, pts.H, pts.sigma, a, sgg);
     double chi2 = 0;
     for (std::size_t i = 0; i < n; ++i) {
       const double r = (h_out / (1.0 + a * pts.F[i]) - pts.H[i]) / pts.sigma[i];
@@ -401,19 +411,9 @@ Curves fit_curves(const std::vector<BinEstimate>& bins, double lo, double hi, in
   for (const BinEstimate& b : bins) {
     if (!b.used) continue;
     const double a = std::exp(std::clamp(log_a.spline(b.phi), kLogAMin, kLogAMax));
-    double sgh = 0, sgg = 0;
-    for (std::size_t i = 0; i < b.x.size(); ++i) {
-      const double g = 1.0 / (1.0 + a * b.x[i]), w = 1.0 / (b.sigma[i] * b.sigma[i]);
-      sgh += w * g * b.H[i];
-      sgg += w * g * g;
-    }
-    if (sgg > 0) {
-      yh.push_back(std::clamp(sgh / sgg, kHMin, kHMax));
-      wh.push_back(sgg);  // 1/se^2 of h at fixed a
-    } else {  // no points kept (a bin built without them): its own estimate
-      yh.push_back(b.h);
-      wh.push_back(1.0 / (b.se_h * b.se_h));
-    }
+    double sgg = 0;  // a used bin has >= min_widths points (fit_bins), so sgg > 0
+    yh.push_back(h_at_fixed_a(b.x, b.H, b.sigma, a, sgg));
+    wh.push_back(sgg);
   }
   return {pspline(basis, x, yh, wh, lambda_h), std::move(log_a)};
 }

@@ -77,14 +77,14 @@ trap 'kill "$pid" 2>/dev/null; wait "$pid" 2>/dev/null; under_way || restore_pre
 # while the run keeps slowing.
 progress() {  # simulated time reached, of the end time, and an ETA from the series (written at each snapshot)
   /usr/bin/python3 - "$dir/series.h5" 2>/dev/null <<'PY'
-import sys, h5py, bisect
+import sys, h5py, numpy
 with h5py.File(sys.argv[1], "r") as f:
     times, walls = f["time"][:], f["wall_seconds"][:]
     t, w = times[-1], walls[-1]
     p = f["params"].attrs
     end, tref = p["end_time_s"], p.get("t_ref_s", 0)
     frac = t / end if end > 0 else 0
-    k = min(bisect.bisect_left(list(times), 0.8 * t), len(times) - 1)
+    k = min(int(numpy.searchsorted(times, 0.8 * t)), len(times) - 1)
     if times[-1] > times[k] and walls[-1] > walls[k]:
         eta = (walls[-1] - walls[k]) / (times[-1] - times[k]) * (end - t)
     else:
