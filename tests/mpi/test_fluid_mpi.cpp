@@ -14,33 +14,16 @@
 #include <vector>
 
 #include "sim/fluid/solver.hpp"
+#include "tests/unit/fluid_test_util.hpp"
 
 namespace {
 
 using cgd::fluid::FluidGrid;
 using cgd::fluid::FluidSettings;
 using cgd::fluid::FluidSolver;
+using cgd::fluid::test::fill_cells;
+using cgd::fluid::test::fill_faces;
 constexpr double kPi = std::numbers::pi;
-
-template <class Fn>
-void fill_cells(const FluidGrid& g, std::vector<double>& f, Fn&& fn) {
-  const auto& h = g.spacing();
-  for (int j = 0; j < g.ny_local(); ++j)
-    for (int k = 0; k < g.nz(); ++k)
-      for (int i = 0; i < g.nx(); ++i)
-        f[g.index(i, j, k)] = fn((i + 0.5) * h[0], (g.j0() + j + 0.5) * h[1], (k + 0.5) * h[2]);
-}
-
-template <class Fn>
-void fill_faces(const FluidGrid& g, int d, std::vector<double>& f, Fn&& fn) {
-  const auto& h = g.spacing();
-  for (int j = 0; j < g.ny_local(); ++j)
-    for (int k = 0; k < g.nz(); ++k)
-      for (int i = 0; i < g.nx(); ++i)
-        f[g.index(i, j, k)] =
-            fn((i + (d == 0 ? 0.0 : 0.5)) * h[0], (g.j0() + j + (d == 1 ? 0.0 : 0.5)) * h[1],
-               (k + (d == 2 ? 0.0 : 0.5)) * h[2]);
-}
 
 /// The variable-eps problem of tests/unit/test_fluid.cpp, on any grid.
 struct Problem {
