@@ -65,10 +65,12 @@ def main():
                             label=label, **{k: v for k, v in style.items() if k != "marker"})
 
     # ---- Figure 2 ----
-    fig, axes = plt.subplots(1, len(phis), figsize=(4 * len(phis), 3.8), squeeze=False)
+    # a panel per solids fraction with alpha = 1 coarse runs (Makefile.pipeline ALPHA1_PHIS); every one if none has
+    phis2 = [p for p in phis if any(r["phi"] == p and r["kind"] == "coarse" and r["alpha"] == 1 for r in rows)] or phis
+    fig, axes = plt.subplots(1, len(phis2), figsize=(4 * len(phis2), 3.8), squeeze=False)
     print("Figure 2: <u_slip,y>/u_t against Delta/d_p (alpha = 1)")
     print(f"{'phi':>5} {'Delta/d_p':>9} {'law':>9} {'R':>2} {'slip/u_t':>16} {'error %':>14} {'core-s/s':>9}")
-    for ax, phi in zip(axes[0], phis):
+    for ax, phi in zip(axes[0], phis2):
         res = [r for r in rows if r["phi"] == phi and r["kind"] == "resolved"]
         for r in res:
             ax.errorbar(r["cell_over_dp"], r["slip"], yerr=r["slip_se"], fmt="s", color="r", label="resolved")
