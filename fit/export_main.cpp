@@ -32,6 +32,11 @@ std::vector<std::string> model_provenance(const std::string& path) {
   if (f.has_attr("/", "code_version")) made += " " + f.attr_string("/", "code_version");
   if (f.has_attr("/", "created")) made += " on " + f.attr_string("/", "created");
   out.push_back(made);
+  if (f.has_attr("/", "calibrated_cells_across")) {
+    std::string grids = "calibrated grids:";
+    for (std::int64_t n : f.attr_ints("/", "calibrated_cells_across")) grids += " " + std::to_string(n);
+    out.push_back(grids + " cells across");
+  }
   if (f.exists("/sources") && f.has_attr("/sources", "files")) {
     const auto files = f.attr_strings("/sources", "files");
     std::vector<std::string> sums;
