@@ -4,7 +4,8 @@
 #                             (at the Table 1 scene's L_char) with --name model into WORK/<model>/, the points to
 #                             evaluate, and the H CSV against the engine (fixture of the tests below)
 #   export_test.sh c|cxx|fortran
-#                             compile the header as C99 (-pedantic), as C++17 and C++20, or call it from Fortran
+#                             compile the header as C99 (-pedantic and more warnings as errors; with clang too where
+#                             it is installed), as C++17 and C++20, or call it from Fortran
 #                             through bind(C) (the module cgd-export writes + one C file with MODEL_IMPLEMENTATION);
 #                             every model's values at every point against the engine's evaluator (export_check compare)
 #   export_test.sh perturb    one coefficient of the half-box header changed in its 10th significant digit: the
@@ -80,19 +81,27 @@ PY
   ;;
 c | cxx | fortran)
   cc=${CGD_EXPORT_CC:-cc} cxx=${CGD_EXPORT_CXX:-c++} fc=${CGD_EXPORT_FC:-}
+  # what a host code may compile with: every header must pass these without a warning
+  c_warnings=(-pedantic -Wall -Wextra -Wshadow -Wconversion -Wdouble-promotion -Wstrict-prototypes -Wmissing-prototypes -Werror)
+  cxx_warnings=(-Wall -Wextra -Wpedantic -Wshadow -Wconversion -Wold-style-cast -Werror)
   for m in "${models[@]}"; do
     d=$work/$m
     [ -s "$d/points.txt" ] || { fail "$m: no points (run export_test.sh write first)"; continue; }
     outs=()
     case $mode in
     c)
-      $cc -std=c99 -pedantic -Wall -Wextra -Werror -O2 -I"$d" "$here/consumer.c" -lm -o "$d/consumer_c" 2>"$d/cc.log" ||
+      $cc -std=c99 "${c_warnings[@]}" -O2 -I"$d" "$here/consumer.c" -lm -o "$d/consumer_c" 2>"$d/cc.log" ||
         { fail "$m: C99 compile: $(head -c 1500 "$d/cc.log")"; continue; }
       run_consumer c "$d/consumer_c" $m && outs+=("C=$d/c.out")
+      if command -v clang >/dev/null; then  # a second compiler where there is one (not required)
+        clang -std=c99 "${c_warnings[@]}" -O2 -I"$d" "$here/consumer.c" -lm -o "$d/consumer_clang" 2>"$d/clang.log" ||
+          { fail "$m: clang C99 compile: $(head -c 1500 "$d/clang.log")"; continue; }
+        run_consumer clang "$d/consumer_clang" $m && outs+=("C-clang=$d/clang.out")
+      fi
       ;;
     cxx)
       for std in 17 20; do
-        $cxx -std=c++$std -Wall -Wextra -Werror -O2 -I"$d" "$here/consumer.cpp" -o "$d/consumer_cxx$std" 2>"$d/cxx.log" ||
+        $cxx -std=c++$std "${cxx_warnings[@]}" -O2 -I"$d" "$here/consumer.cpp" -o "$d/consumer_cxx$std" 2>"$d/cxx.log" ||
           { fail "$m: C++$std compile: $(head -c 1500 "$d/cxx.log")"; continue; }
         run_consumer cxx$std "$d/consumer_cxx$std" $m && outs+=("C++$std=$d/cxx$std.out")
       done
@@ -100,7 +109,7 @@ c | cxx | fortran)
     fortran)
       [ -n "$fc" ] || { fail "no Fortran compiler (gfortran: scripts/setup.sh installs it)"; exit 1; }
       ( cd "$d" &&
-        $cc -std=c99 -pedantic -Wall -Wextra -Werror -O2 -I"$d" -c "$here/impl.c" -o impl.o &&
+        $cc -std=c99 "${c_warnings[@]}" -O2 -I"$d" -c "$here/impl.c" -o impl.o &&
         $fc -std=f2008 -Wall -Werror -O2 -c model.f90 -o model_mod.o &&
         $fc -std=f2008 -Wall -Werror -O2 "$here/consumer.f90" model_mod.o impl.o -lm -o consumer_f ) >"$d/fc.log" 2>&1 ||
         { fail "$m: Fortran build: $(head -c 1500 "$d/fc.log")"; continue; }
