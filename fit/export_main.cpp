@@ -7,7 +7,6 @@
 #include <algorithm>
 #include <cctype>
 #include <filesystem>
-#include <fstream>
 #include <iostream>
 #include <string>
 #include <vector>
@@ -17,6 +16,7 @@
 #include "core/filtered_drag.hpp"
 #include "core/h5.hpp"
 #include "core/scene.hpp"
+#include "core/text_file.hpp"
 #include "fit/export_model.hpp"
 
 namespace fs = std::filesystem;
@@ -25,9 +25,8 @@ namespace {
 
 /// What the header's comment says about where the model came from, beyond the in-memory model: the file's
 /// code_version and created, its /provenance text and its /sources (the filtered files and their checksums).
-std::vector<std::string> model_provenance(const std::string& path) {
+std::vector<std::string> model_provenance(const cgd::h5::File& f) {
   std::vector<std::string> out;
-  const cgd::h5::File f = cgd::h5::File::open_read(path, MPI_COMM_SELF);
   std::string made = "written by cgd";
   if (f.has_attr("/", "code_version")) made += " " + f.attr_string("/", "code_version");
   if (f.has_attr("/", "created")) made += " on " + f.attr_string("/", "created");
@@ -51,9 +50,8 @@ std::vector<std::string> model_provenance(const std::string& path) {
 }
 
 /// The model file's /bands (empty when it has none: table models, older files).
-cgd::exporter::Bands model_bands(const std::string& path) {
+cgd::exporter::Bands model_bands(const cgd::h5::File& f, const std::string& path) {
   cgd::exporter::Bands b;
-  const cgd::h5::File f = cgd::h5::File::open_read(path, MPI_COMM_SELF);
   if (!f.exists("/bands/phi") || !f.exists("/bands/F") || !f.exists("/bands/H_low") || !f.exists("/bands/H_high"))
     return b;
   b.phi = f.read_double("/bands/phi");
@@ -141,8 +139,9 @@ int main(int argc, char** argv) {
     std::vector<double> phis, deltas;
     if (!radl) {
       model = cgd::load_drag_model(model_path);
-      e = cgd::exporter::from_model(*model, name, model_provenance(model_path));
-      bands = model_bands(model_path);
+      const cgd::h5::File f = cgd::h5::File::open_read(model_path, MPI_COMM_SELF);
+      e = cgd::exporter::from_model(*model, name, model_provenance(f));
+      bands = model_bands(f, model_path);
       deltas = e.calibrated_delta_m;
     } else {
       double d = 0;
@@ -197,13 +196,9 @@ int main(int argc, char** argv) {
       if (fs::exists(dir / file) && !force)
         throw cgd::InputError((dir / file).string() + " exists (--force overwrites it)");
     fs::create_directories(dir);
-    for (const auto& [file, text] : files) {
-      std::ofstream out(dir / (file + ".tmp"), std::ios::binary);
-      out << text;
-      out.close();
-      if (!out) throw cgd::RunError((dir / (file + ".tmp")).string() + ": cannot write");
-    }
-    for (const auto& [file, text] : files) fs::rename(dir / (file + ".tmp"), dir / file);
+    std::vector<std::pair<fs::path, std::string>> in_dir;
+    for (const auto& [file, text] : files) in_dir.emplace_back(dir / file, text);
+    cgd::write_text_files_atomically(in_dir);
     if (!quiet)
       for (const auto& [file, text] : files) std::cout << "wrote " << (dir / file).string() << "\n";
     return cgd::kExitOk;
