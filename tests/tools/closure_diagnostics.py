@@ -1,0 +1,104 @@
+#!/usr/bin/python3
+"""tools/closure_diagnostics.py against answers computed by hand: a 2 x 2 x 2 m periodic box seen on N = 2
+cells (8 cubes of 1 m), a 4^3 fluid grid with eps = 0.6, u_y = 1 m/s in the fine cells of cube 0 and eps = 0.9,
+u_y = 2 m/s elsewhere, three particles of 0.01 m^3 in cube 0 (v_y = 0.1, 0.2, 0.3) and one in cube 7 given at
+x = 3.5 m (wrapped to 1.5: v_y = -0.4); u_t = 1 m/s. Then
+  cube 0: phi 0.03, slip 1 - 0.2 = 0.8; cube 7: phi 0.01, slip 2 - (-0.4) = 2.4; local slip (3 x 0.8 + 2.4)/4 = 1.2;
+  domain slip (8 x 0.6 + 56 x 1.8)/(8 x 0.6 + 56 x 0.9) - 0.05 = 1.913043... - 0.05; drift = domain - 1.2;
+  phi (particle-weighted) mean 0.025, std sqrt(0.0007 - 0.025^2); <phi> = 0.005, tail phi > 0.011: 75 %;
+  pressure support: G_y = -59.95 (the mixture weight at rho_p 1000, rho_f 1, g 10) plus the particles' own
+  -10, -10, -10, +10 Pa/m: 64.95 / 59.95.
+A snapshot before --from-tref (different numbers) must be left out; the fine-to-coarse overlap of a grid that
+does not divide the coarse one (3 fine cells on 2 coarse); the refusals (a missing dataset, a grid that does not
+tile the box): exit 2, no traceback.
+usage: /usr/bin/python3 tests/tools/closure_diagnostics.py SOURCE_DIR"""
+import math
+import os
+import subprocess
+import sys
+import tempfile
+
+import h5py
+import numpy as np
+
+source = sys.argv[1] if len(sys.argv) > 1 else os.path.join(os.path.dirname(__file__), "..", "..")
+tool = os.path.join(source, "tools", "closure_diagnostics.py")
+sys.path.insert(0, os.path.join(source, "tools"))
+import closure_diagnostics as cd  # noqa: E402
+
+failures = 0
+
+
+def check(ok, what):
+    global failures
+    print(("ok   " if ok else "FAIL ") + what)
+    failures += not ok
+
+
+def snapshot(path, time, vy, box=(2.0, 2.0, 2.0), drop=None):
+    eps = np.full((4, 4, 4), 0.9)
+    u = np.full((4, 4, 4), 2.0)
+    eps[:2, :2, :2] = 0.6
+    u[:2, :2, :2] = 1.0
+    eu = np.zeros((4, 4, 4, 3))
+    eu[..., 1] = eps * u
+    x = np.array([[0.5, 0.5, 0.5], [0.25, 0.25, 0.75], [0.75, 0.1, 0.2], [3.5, 1.5, 1.5]])
+    v = np.zeros((4, 3))
+    v[:, 1] = vy
+    gp = np.zeros((4, 3))
+    gp[:, 1] = [-10, -10, -10, 10]
+    with h5py.File(path, "w") as f:
+        f.attrs["cgd_format"] = "snapshot"
+        f.attrs["time"] = time
+        p = f.create_group("params").attrs
+        p["box_size_m"] = np.array(box)
+        p["particle_volume_m3"], p["parcel_size"], p["u_t_m_s"], p["t_ref_s"] = 0.01, 1.0, 1.0, 1.0
+        p["density_kg_m3"], p["fluid_density_kg_m3"], p["gravity_m_s2"] = 1000.0, 1.0, np.array([0.0, -10.0, 0.0])
+        parts = f.create_group("particles")
+        parts.attrs["pressure_gradient_mean"] = np.array([0.0, -59.95, 0.0])
+        for name, a in (("position", x), ("velocity", v), ("pressure_gradient", gp)):
+            if name != drop:
+                parts[name] = a
+        fl = f.create_group("fluid")
+        fl.attrs["cells"], fl.attrs["spacing"], fl.attrs["origin"] = np.array([4, 4, 4]), np.full(3, 0.5), np.zeros(3)
+        fl["void_fraction"] = eps
+        if drop != "eps_velocity":
+            fl["eps_velocity"] = eu
+
+
+with tempfile.TemporaryDirectory() as tmp:
+    run = os.path.join(tmp, "run")
+    os.makedirs(os.path.join(run, "snapshots"))
+    snapshot(os.path.join(run, "snapshots", "snap_0.h5"), 0.5, [5.0, 5.0, 5.0, 5.0])  # before the window
+    snapshot(os.path.join(run, "snapshots", "snap_1.h5"), 2.0, [0.1, 0.2, 0.3, -0.4])
+    r = cd.analyse([run], 2, 1.0, 0.02)
+    domain = (8 * 0.6 + 56 * 1.8) / (8 * 0.6 + 56 * 0.9) - 0.05
+    check(r["snapshots"] == 1, f"only the snapshot in the window ({r['snapshots']})")
+    check(abs(r["local"] - 1.2) < 1e-12, f"local slip 1.2 ({r['local']})")
+    check(abs(r["domain"] - domain) < 1e-12, f"domain slip {domain:.6f} ({r['domain']})")
+    check(abs(r["drift"] - (domain - 1.2)) < 1e-12, f"drift {domain - 1.2:.6f} ({r['drift']})")
+    check(abs(r["phi_pw"] - 0.025) < 1e-12 and abs(r["phi_std"] - math.sqrt(0.0007 - 0.025 ** 2)) < 1e-12,
+          f"phi mean 0.025, std 0.00866 ({r['phi_pw']}, {r['phi_std']})")
+    check(abs(r["phi"] - 0.005) < 1e-15 and abs(r["tail"] - 0.75) < 1e-12, f"<phi> 0.005, tail 75 % ({r['tail']})")
+    check(abs(r["support"] - 64.95 / 59.95) < 1e-12, f"pressure support 1.0834 ({r['support']})")
+    b0, b1 = r["bins"][0], r["bins"][1]
+    check(abs(b0["fraction"] - 0.25) < 1e-12 and abs(b0["slip"] - 2.4) < 1e-12 and
+          abs(b1["fraction"] - 0.75) < 1e-12 and abs(b1["slip"] - 0.8) < 1e-12,
+          f"per bin: 25 % at slip 2.4, 75 % at 0.8 ({b0}, {b1})")
+    w = cd.overlap_matrix(3, 2.0 / 3.0, 0.0, 2, 1.0)
+    check(np.allclose(w, [[2 / 3, 1 / 3, 0], [0, 1 / 3, 2 / 3]]), f"overlap of 3 fine cells on 2 coarse ({w.tolist()})")
+    out = subprocess.run([sys.executable, tool, "--resolved", run, "--cells", "2", "--from-tref", "1"],
+                         capture_output=True, text=True)
+    check(out.returncode == 0 and "| resolved | 1 | 0.005 |" in out.stdout, "the table of the command line")
+    for label, kw, cells in (("a missing dataset", {"drop": "eps_velocity"}, "2"),
+                             ("a grid that does not tile the box", {"box": (2.0, 2.5, 2.0)}, "2")):
+        bad = os.path.join(tmp, "bad")
+        os.makedirs(os.path.join(bad, "snapshots"), exist_ok=True)
+        snapshot(os.path.join(bad, "snapshots", "snap_1.h5"), 2.0, [0.1, 0.2, 0.3, -0.4], **kw)
+        out = subprocess.run([sys.executable, tool, "--resolved", bad, "--cells", cells, "--from-tref", "1"],
+                             capture_output=True, text=True)
+        check(out.returncode == 2 and "snap_1.h5" in out.stderr and "Traceback" not in out.stderr,
+              f"{label}: exit 2 naming the file ({out.returncode}: {out.stderr.strip()})")
+
+print(f"{failures} failure(s)")
+sys.exit(1 if failures else 0)

@@ -1,0 +1,283 @@
+#!/usr/bin/python3
+"""Coarse runs against the resolved runs seen on the same coarse grid (issue 28): why a closure in the
+filtered solids fraction alone can miss the slip.
+
+Every run -- resolved (cgd-generate) or coarse (cgd-coarse) -- is seen through one and the same operator: the
+box filter of its snapshots onto a grid of N cells across the box width (N x N*Ly/Lx x N cubes). For each
+snapshot of the window t >= T t_ref, per coarse cell c:
+
+  phi_c   the solids volume of the particles (parcels: alpha^3 particle volumes) whose centre lies in c, over
+          the cell volume (nearest-grid-point deposit: the same for a resolved run and a coarse one);
+  v_c     the particles' volume-weighted mean velocity in c;
+  u_c     the fluid's Favre velocity <eps u>_c / <eps>_c, the sums over the fluid cells that overlap c weighted
+          by the overlapping volume (eps u: the snapshot's fluid/eps_velocity; a coarse run's own fluid
+          grid is c itself when it has N cells across);
+  s_c     the local slip u_c,y - v_c,y.
+
+Per run (means over the window's snapshots; slips over u_t):
+
+  domain slip   <eps u>/<eps> - <v>: the run's own domain slip (docs/models.md; its series' slip_velocity);
+  local slip    the particle-weighted mean of s_c: the slip a closure in phi_c sees on average;
+  drift         domain slip - local slip: the sub-grid drift, the part of the slip made by the correlation
+                of particles and fluid below the grid (a phi-only closure has no hold on it);
+  phi spread    the particle-weighted mean and standard deviation of phi_c, its 99th percentile, and the
+                fraction of the particles in cells above 2.2 <phi> (the dense tail);
+  p support     -<dp/dy> over the particles (particles/pressure_gradient plus the removed mean gradient
+                /particles@pressure_gradient_mean: the fluid's whole pressure gradient at each particle) over
+                the mixture weight (rho_p <phi> + rho_f (1 - <phi>)) g: 1 when the
+                particles sit on average where the mean gradient is, above 1 when the fluid's pressure
+                carries them more (dense cells over-compacted by the coarse run).
+  (the +- of the domain slip and the drift: their snapshots' standard deviation over sqrt(count); snapshots
+  0.5 t_ref apart are correlated, so it is a lower bound -- the study's batch means give the honest error)
+  per phi bin   the particle fraction and the mean local slip s_c of the particles in cells of each phi bin
+                (the conditional slip: the closure's own target, bin by bin).
+
+usage: /usr/bin/python3 tools/closure_diagnostics.py --resolved RUN [--resolved RUN]... [--coarse RUN]...
+           --cells N [--from-tref T] [--bin 0.02] [-o PREFIX]
+RUN is a run directory (snapshots/*.h5); several --resolved runs (seeds) are pooled as one reference; each
+--coarse run is a row of its own (its label: the directory's name). Writes PREFIX.md (the tables) and
+PREFIX.png (phi distributions and conditional slip) with -o; prints the tables.
+Exit status 0; 2 for bad arguments or a file that is not a snapshot (the message names the file).
+(Debian's h5py/numpy/matplotlib belong to /usr/bin/python3.)"""
+import argparse
+import glob
+import math
+import os
+import sys
+
+import h5py
+import numpy as np
+
+
+def fail(msg):
+    print(f"closure_diagnostics.py: {msg}", file=sys.stderr)
+    sys.exit(2)
+
+
+def need(f, path, name, shape=None):
+    if name not in f:
+        fail(f"{path}: /{name} missing: not a cgd snapshot")
+    d = f[name]
+    if shape is not None and (len(d.shape) != len(shape) or any(s is not None and a != s for a, s in zip(d.shape, shape))):
+        fail(f"{path}: /{name} has shape {d.shape}, expected {tuple('*' if s is None else s for s in shape)}")
+    return d
+
+
+def overlap_matrix(n_fine, h_fine, origin, n_coarse, h_coarse):
+    """W[c, k]: the length of fine cell k inside coarse cell c (one direction of the periodic box)."""
+    w = np.zeros((n_coarse, n_fine))
+    for k in range(n_fine):
+        a = origin + k * h_fine
+        b = a + h_fine
+        for c in range(n_coarse):
+            lo, hi = c * h_coarse, (c + 1) * h_coarse
+            w[c, k] = max(0.0, min(b, hi) - max(a, lo))
+    return w
+
+
+def snapshot_cells(path, n_cells):
+    """Per coarse cell of one snapshot: solids volume, particle volume x velocity (y), fluid <eps> and <eps u_y>
+    volumes; and the run's constants."""
+    try:
+        f = h5py.File(path, "r")
+    except OSError as e:
+        fail(f"{path}: not a readable HDF5 file ({e})")
+    with f:
+        if f.attrs.get("cgd_format") not in ("snapshot", b"snapshot"):
+            fail(f"{path}: cgd_format is {f.attrs.get('cgd_format')!r}, expected 'snapshot'")
+        p = need(f, path, "params").attrs
+        for key in ("box_size_m", "particle_volume_m3", "parcel_size", "u_t_m_s", "t_ref_s", "density_kg_m3",
+                    "fluid_density_kg_m3", "gravity_m_s2"):
+            if key not in p:
+                fail(f"{path}: /params attribute {key} missing")
+        box = np.asarray(p["box_size_m"], dtype=float)
+        x = np.asarray(need(f, path, "particles/position", (None, 3))[:], dtype=float)
+        n = x.shape[0]
+        v = np.asarray(need(f, path, "particles/velocity", (n, 3))[:], dtype=float)
+        # the snapshot's gradient has the mean driving gradient G removed (docs/schema-run.md): add it back
+        parts = need(f, path, "particles")
+        if "pressure_gradient_mean" not in parts.attrs:
+            fail(f"{path}: /particles attribute pressure_gradient_mean missing")
+        dpdy = (np.asarray(need(f, path, "particles/pressure_gradient", (n, 3))[:, 1], dtype=float) +
+                float(np.asarray(parts.attrs["pressure_gradient_mean"])[1]))
+        fl = need(f, path, "fluid")
+        cells_f = np.asarray(fl.attrs["cells"], dtype=int)
+        spacing = np.asarray(fl.attrs["spacing"], dtype=float)
+        origin = np.asarray(fl.attrs["origin"], dtype=float)
+        shape_f = (cells_f[2], cells_f[1], cells_f[0])
+        eps = np.asarray(need(f, path, "fluid/void_fraction", shape_f)[:], dtype=float)
+        eu = np.asarray(need(f, path, "fluid/eps_velocity", shape_f + (3,))[:, :, :, 1], dtype=float)
+        for name, a in (("particles/position", x), ("particles/velocity", v), ("fluid/void_fraction", eps),
+                        ("fluid/eps_velocity", eu)):
+            if not np.all(np.isfinite(a)):
+                fail(f"{path}: /{name} holds non-finite values")
+        t = float(f.attrs.get("time", math.nan))
+        alpha = float(p["parcel_size"])
+        vol = alpha ** 3 * float(p["particle_volume_m3"])
+        consts = dict(box=box, u_t=float(p["u_t_m_s"]), t_ref=float(p["t_ref_s"]), rho_p=float(p["density_kg_m3"]),
+                      rho_f=float(p["fluid_density_kg_m3"]), g=abs(float(np.asarray(p["gravity_m_s2"])[1])),
+                      vol=vol)
+    h = box[0] / n_cells
+    ny = int(round(box[1] / h))
+    if abs(ny * h - box[1]) > 1e-9 * box[1] or abs(n_cells * h - box[2]) > 1e-9 * box[2]:
+        fail(f"{path}: a grid of {n_cells} cubes across {box[0]:.4g} m does not tile the box {box.tolist()}")
+    grid = (n_cells, ny, n_cells)
+    # particles: nearest-grid-point deposit (positions wrapped into the periodic box)
+    xw = np.mod(x, box)
+    idx = np.minimum((xw / h).astype(int), np.array(grid) - 1)
+    flat = (idx[:, 2] * grid[1] + idx[:, 1]) * grid[0] + idx[:, 0]
+    ncell = grid[0] * grid[1] * grid[2]
+    solids = np.bincount(flat, minlength=ncell) * vol
+    momentum = np.bincount(flat, weights=v[:, 1], minlength=ncell) * vol
+    # fluid: overlap-weighted volume sums onto the coarse cells (separable)
+    wx = overlap_matrix(cells_f[0], spacing[0], origin[0], grid[0], h)
+    wy = overlap_matrix(cells_f[1], spacing[1], origin[1], grid[1], h)
+    wz = overlap_matrix(cells_f[2], spacing[2], origin[2], grid[2], h)
+    e_c = np.einsum("zk,yj,xi,kji->zyx", wz, wy, wx, eps).reshape(-1)
+    eu_c = np.einsum("zk,yj,xi,kji->zyx", wz, wy, wx, eu).reshape(-1)
+    cell_volume = h ** 3
+    fine_volume = float(np.prod(spacing))
+    return dict(t=t, flat=flat, solids=solids, momentum=momentum, e=e_c, eu=eu_c, cell_volume=cell_volume,
+                n=n, v_mean=float(v[:, 1].mean()), dpdy_mean=float(dpdy.mean()),
+                u_domain=float(eu.sum() / eps.sum()), phi_mean=n * vol / float(np.prod(box)),
+                fine_volume=fine_volume, **consts)
+
+
+def run_snapshots(run, from_tref):
+    files = sorted(glob.glob(os.path.join(run, "snapshots", "*.h5")))
+    if not files:
+        fail(f"{run}: no snapshots/*.h5")
+    return files, from_tref
+
+
+def analyse(runs, n_cells, from_tref, bin_width):
+    """Pooled figures of one or more runs (their window's snapshots)."""
+    phi_all, slip_all, rows = [], [], []
+    consts = None
+    for run in runs:
+        files, _ = run_snapshots(run, from_tref)
+        used = 0
+        for path in files:
+            s = snapshot_cells(path, n_cells)
+            if not s["t"] >= from_tref * s["t_ref"] - 1e-12:
+                continue
+            used += 1
+            consts = s
+            occupied = s["solids"] > 0
+            phi = s["solids"] / s["cell_volume"]
+            v_c = np.where(occupied, s["momentum"] / np.where(occupied, s["solids"], 1.0), 0.0)
+            u_c = s["eu"] / s["e"]
+            slip_c = (u_c - v_c) / s["u_t"]
+            weight = s["solids"] / s["solids"].sum()  # particle (volume) weight of each cell
+            phi_p = phi[s["flat"]]                    # each particle's cell phi
+            slip_p = slip_c[s["flat"]]
+            phi_all.append(phi_p)
+            slip_all.append(slip_p)
+            domain = (s["u_domain"] - s["v_mean"]) / s["u_t"]
+            local = float(np.sum(weight * slip_c))
+            weight_mix = (s["rho_p"] * s["phi_mean"] + s["rho_f"] * (1 - s["phi_mean"])) * s["g"]
+            rows.append(dict(domain=domain, local=local, drift=domain - local,
+                             support=-s["dpdy_mean"] / weight_mix, phi_mean=s["phi_mean"]))
+        if used == 0:
+            fail(f"{run}: no snapshot at or after {from_tref} t_ref")
+    phi_p = np.concatenate(phi_all)
+    slip_p = np.concatenate(slip_all)
+    phi_mean = rows[0]["phi_mean"]
+    mean = lambda k: float(np.mean([r[k] for r in rows]))  # noqa: E731
+    stderr = lambda k: float(np.std([r[k] for r in rows], ddof=1) / math.sqrt(len(rows))) if len(rows) > 1 else math.nan  # noqa: E731
+    edges = np.arange(0.0, max(phi_p.max(), 0.0) + bin_width, bin_width)
+    which = np.minimum(np.digitize(phi_p, edges) - 1, len(edges) - 2)
+    bins = []
+    for b in range(len(edges) - 1):
+        sel = which == b
+        bins.append(dict(lo=edges[b], hi=edges[b + 1], fraction=float(sel.mean()),
+                         slip=float(slip_p[sel].mean()) if sel.any() else math.nan))
+    return dict(snapshots=len(rows), phi=phi_mean, domain=mean("domain"), domain_err=stderr("domain"),
+                local=mean("local"), drift=mean("drift"), drift_err=stderr("drift"), support=mean("support"),
+                phi_pw=float(phi_p.mean()), phi_std=float(phi_p.std()), phi_p99=float(np.percentile(phi_p, 99)),
+                tail=float(np.mean(phi_p > 2.2 * phi_mean)), bins=bins, phi_p=phi_p)
+
+
+def tables(results, n_cells, from_tref):
+    out = [f"Runs seen on the grid of {n_cells} cells across (box filter, nearest-grid-point particles), "
+           f"snapshots from {from_tref:g} t_ref; slips over u_t; ± snapshot scatter / sqrt(count), a lower bound "
+           "(correlated snapshots).", "",
+           "| run | snapshots | <phi> | domain slip | local slip | drift | phi (pw) mean / std / p99 | "
+           "particles at phi > 2.2 <phi> | p support |", "|---|---|---|---|---|---|---|---|---|"]
+    for label, r in results:
+        err = f" ± {r['domain_err']:.3f}" if math.isfinite(r["domain_err"]) else ""
+        derr = f" ± {r['drift_err']:.3f}" if math.isfinite(r["drift_err"]) else ""
+        out.append(f"| {label} | {r['snapshots']} | {r['phi']:.3f} | {r['domain']:.3f}{err} | {r['local']:.3f} | "
+                   f"{r['drift']:.3f}{derr} | {r['phi_pw']:.3f} / {r['phi_std']:.3f} / {r['phi_p99']:.3f} | "
+                   f"{100 * r['tail']:.1f} % | {r['support']:.2f} |")
+    n_bins = max(len(r["bins"]) for _, r in results)
+    out += ["", "Conditional slip: particle fraction and mean local slip per phi bin", "",
+            "| phi bin | " + " | ".join(label for label, _ in results) + " |",
+            "|---|" + "---|" * len(results)]
+    for b in range(n_bins):
+        lo = b * (results[0][1]["bins"][0]["hi"] - results[0][1]["bins"][0]["lo"])
+        cells = []
+        for _, r in results:
+            if b < len(r["bins"]) and r["bins"][b]["fraction"] > 0:
+                cells.append(f"{100 * r['bins'][b]['fraction']:.1f} % : {r['bins'][b]['slip']:.3f}")
+            else:
+                cells.append("")
+        if any(cells):
+            out.append(f"| {lo:.2f}-{lo + results[0][1]['bins'][0]['hi']:.2f} | " + " | ".join(cells) + " |")
+    return "\n".join(out)
+
+
+def plot(results, prefix):
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    fig, ax = plt.subplots(1, 2, figsize=(11, 4.2))
+    for label, r in results:
+        lo = np.array([b["lo"] for b in r["bins"]])
+        w = r["bins"][0]["hi"] - r["bins"][0]["lo"]
+        frac = np.array([b["fraction"] for b in r["bins"]])
+        slip = np.array([b["slip"] for b in r["bins"]])
+        ax[0].step(lo + w, frac / w, where="pre", label=label)
+        keep = frac > 1e-3
+        ax[1].plot(lo[keep] + w / 2, slip[keep], "o-", ms=3, label=label)
+    ax[0].set_xlabel("cell $\\bar\\phi$ (box filter)")
+    ax[0].set_ylabel("particle-weighted density")
+    ax[1].set_xlabel("cell $\\bar\\phi$")
+    ax[1].set_ylabel("local slip / $u_t$")
+    ax[1].legend(fontsize=7)
+    fig.tight_layout()
+    fig.savefig(prefix + ".png", dpi=120)
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--resolved", action="append", default=[], help="a resolved run directory (repeat: pooled)")
+    ap.add_argument("--coarse", action="append", default=[], help="a coarse run directory (repeat: one row each)")
+    ap.add_argument("--cells", type=int, required=True, help="cells across the box width of the common grid")
+    ap.add_argument("--from-tref", type=float, default=20.0, help="first snapshot time, t_ref (default 20)")
+    ap.add_argument("--bin", type=float, default=0.02, help="phi bin width (default 0.02)")
+    ap.add_argument("-o", dest="prefix", help="write PREFIX.md and PREFIX.png")
+    a = ap.parse_args()
+    if not a.resolved:
+        fail("give at least one --resolved run")
+    if a.cells < 1:
+        fail(f"--cells {a.cells}: must be >= 1")
+    if not a.bin > 0:
+        fail(f"--bin {a.bin}: must be > 0")
+    for run in a.resolved + a.coarse:
+        if not os.path.isdir(run):
+            fail(f"{run}: not a run directory")
+    results = [("resolved" + (f" ({len(a.resolved)} runs)" if len(a.resolved) > 1 else ""),
+                analyse(a.resolved, a.cells, a.from_tref, a.bin))]
+    for run in a.coarse:
+        results.append((os.path.basename(os.path.normpath(run)), analyse([run], a.cells, a.from_tref, a.bin)))
+    text = tables(results, a.cells, a.from_tref)
+    print(text)
+    if a.prefix:
+        with open(a.prefix + ".md", "w") as f:
+            f.write(text + "\n")
+        plot(results, a.prefix)
+
+
+if __name__ == "__main__":
+    main()
