@@ -6,7 +6,7 @@
 # times that state. A pipeline run directory (out/generate/phi<phi> of `make -f Makefile.pipeline PROFILE=half
 # generate`) serves as well. Figures only, never asserted (bench/README.md, "Developed state").
 # usage: bench/developed_states.sh OUT [phis=0.05,0.30] [tref=20] [ranks=2]
-# Cost on 2 idle cores (this machine, bench/README.md): 0.05 to 20 t_ref ~10 min, 0.30 to 20 t_ref ~2 h.
+# Cost: that of the runs themselves (tools/run_health.py RUN_DIR prints their wall seconds per t_ref).
 # Exit status: 0 every state made; 1 a run failed; 2 bad arguments.
 set -uo pipefail
 repo=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
