@@ -26,7 +26,8 @@
 //      output, no series rows (their cost is in bench/README.md's coupled figures).
 // Printed: particle-steps/s/core, CPU-ns per particle-step per phase (seconds summed over ranks /
 // particle-steps), DEM steps per neighbour-list rebuild, the fluid step, and the projected hours of
-// each Table 1 run (data/scenes/table1_*.toml: 1.11 s each) at this rank count, assuming the
+// each Table 1 run (data/scenes/table1_*.toml: 1.11 s each) and each PROFILE=half resolved run
+// (Makefile.pipeline: 53 x 213 x 53 d_p, 50 t_ref, phi = 0.02-0.40) at this rank count, assuming the
 // measured cost per particle-step and per fluid step (the same 32 x 128 x 32 grid) and the measured
 // fluid step -- a proxy for the denser scenes, whose clusters have more contacts.
 // The tiled small box is calmer than the Table 1 box developed in place (issue 17, third round: 35 DEM
@@ -359,6 +360,8 @@ int main(int argc, char** argv) {
     // how the particles of the last step split (free flight: sim/dem/system.hpp; 0 before issue 17)
     double split[2] = {static_cast<double>(dem.free_flight_particles()), static_cast<double>(dem.integrated_particles())};
     MPI_Allreduce(MPI_IN_PLACE, split, 2, MPI_DOUBLE, MPI_SUM, MPI_COMM_WORLD);
+    // touching pairs at the last step (collective): the contact load of the state
+    const double touching_pairs = dem.diagnostics().contacts;
     const double bytes_local = static_cast<double>(dem.bytes());
     double bytes = 0;
     MPI_Allreduce(&bytes_local, &bytes, 1, MPI_DOUBLE, MPI_SUM, MPI_COMM_WORLD);
@@ -388,8 +391,9 @@ int main(int argc, char** argv) {
       std::printf("neighbour list: %lld rebuilds, %.1f DEM steps per rebuild; %.2f entries per particle\n",
                   static_cast<long long>(rebuilds), rebuilds > 0 ? static_cast<double>(dem_steps) / rebuilds : 0.0,
                   entries[1] / N);
-      std::printf("last step: %.1f %% of the particles in free flight, %.1f %% integrated every step\n",
-                  100.0 * split[0] / N, 100.0 * split[1] / N);
+      std::printf("last step: %.1f %% of the particles in free flight, %.1f %% integrated every step; "
+                  "%.3f contacts per particle (touching pairs x 2 / N)\n",
+                  100.0 * split[0] / N, 100.0 * split[1] / N, 2.0 * touching_pairs / N);
       std::printf("engine arrays: %.0f B per particle (DemSystem::bytes, all ranks)\n", bytes / N);
       std::printf("\n%-22s %12s %14s %8s\n", "phase", "CPU s", "ns/part-step", "share");
       for (std::size_t k = 0; k < names.size(); ++k)
@@ -407,6 +411,7 @@ int main(int argc, char** argv) {
                   "dt_fluid=%.4g",
                   ranks, static_cast<long long>(nt), 1e9 * wall * ranks / ps, 1e9 * cpu / ps, ps / (wall * ranks),
                   rebuilds > 0 ? static_cast<double>(dem_steps) / rebuilds : 0.0, dt_fluid);
+      std::printf(" contacts_per_particle=%.3f entries_per_particle=%.2f", 2.0 * touching_pairs / N, entries[1] / N);
       for (std::size_t k = 0; k < names.size(); ++k) {
         std::string key = names[k];
         for (char& c : key)
@@ -422,19 +427,29 @@ int main(int argc, char** argv) {
                     "fluid per step scaled by cells), from the wall time and from the process CPU time:\n",
                     ranks);
         const fs::path scenes = fs::path(CGD_SOURCE_DIR) / "data" / "scenes";
+        // the Table 1 scenes, then the PROFILE=half resolved runs (Makefile.pipeline: pipeline_demo.toml with
+        // its GENERATE_SET, at the six solids fractions of the full-range model)
+        std::vector<std::pair<std::string, std::vector<std::string>>> runs;
         std::vector<fs::path> files;
         for (const auto& e : fs::directory_iterator(scenes))
           if (e.path().filename().string().rfind("table1_", 0) == 0) files.push_back(e.path());
         std::sort(files.begin(), files.end());
+        for (const fs::path& f : files) runs.push_back({f.string(), {}});
+        for (const char* phi : {"0.02", "0.05", "0.10", "0.20", "0.30", "0.40"})
+          runs.push_back({(scenes / "pipeline_demo.toml").string(),
+                          {"domain.size_dp=[53,213,53]", "contact.gamma_star=2e-3", "run.end_time_tref=50",
+                           std::string("particles.solids_fraction=") + phi}});
         const double cells_here = static_cast<double>(tiled_cells[0]) * tiled_cells[1] * tiled_cells[2];
-        for (const fs::path& f : files) {
-          const cgd::Scene s = cgd::load_scene(f.string(), {});
+        for (const auto& [path, overrides] : runs) {
+          const cgd::Scene s = cgd::load_scene(path, overrides);
+          const std::string label =
+              overrides.empty() ? s.name : "half phi=" + overrides.back().substr(overrides.back().find('=') + 1);
           const double n = static_cast<double>(s.derived.particle_count);
           const double steps = std::round(s.run.end_time_s / s.derived.dt_dem_s);
           const double cells = static_cast<double>(s.derived.cells[0]) * s.derived.cells[1] * s.derived.cells[2];
           const double hours =
               (n * steps * c_particle + s.run.end_time_s / dt_fluid * c_fluid * cells / cells_here) / ranks / 3600;
-          std::printf("  %-16s %9.0f particles  %.4g s  %.3g h (wall)  %.3g h (CPU time)\n", s.name.c_str(), n,
+          std::printf("  %-16s %9.0f particles  %.4g s  %.3g h (wall)  %.3g h (CPU time)\n", label.c_str(), n,
                       s.run.end_time_s, hours, hours * cpu_share);
         }
       }

@@ -1,0 +1,42 @@
+#!/usr/bin/env bash
+# The developed states the engine benchmarks time (issue 25), made reproducibly: the PROFILE=half resolved
+# run (Makefile.pipeline's GENERATE_SET: 53 x 213 x 53 d_p, gamma* = 2e-3) at each solids fraction, run from
+# rest to T t_ref with cgd-generate (continued from its checkpoint when OUT/phi<phi> already has one), so that
+#   build/bench/cgd-bench-developed --from-run OUT/phi<phi>
+# times that state. A pipeline run directory (out/generate/phi<phi> of `make -f Makefile.pipeline PROFILE=half
+# generate`) serves as well. Figures only, never asserted (bench/README.md, "Developed state").
+# usage: bench/developed_states.sh OUT [phis=0.05,0.30] [tref=20] [ranks=2]
+# Cost: that of the runs themselves (tools/run_health.py RUN_DIR prints their wall seconds per t_ref).
+# Exit status: 0 every state made; 1 a run failed; 2 bad arguments.
+set -uo pipefail
+repo=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
+gen=${CGD_GENERATE:-$repo/build/cgd-generate}
+[ $# -ge 1 ] || { echo "usage: bench/developed_states.sh OUT [phis=0.05,0.30] [tref=20] [ranks=2]" >&2; exit 2; }
+out=$1
+IFS=, read -r -a phis <<< "${2:-0.05,0.30}"
+tref=${3:-20}
+ranks=${4:-2}
+[ -x "$gen" ] || { echo "developed_states.sh: $gen not found: build cgd first (cmake --build build)" >&2; exit 2; }
+[[ $tref =~ ^[0-9]+([.][0-9]+)?$ ]] || { echo "developed_states.sh: tref '$tref' is not a number" >&2; exit 2; }
+[[ $ranks =~ ^[1-9][0-9]*$ ]] || { echo "developed_states.sh: ranks '$ranks' is not a positive integer" >&2; exit 2; }
+for phi in "${phis[@]}"; do
+  [[ $phi =~ ^0?[.][0-9]+$ ]] || { echo "developed_states.sh: solids fraction '$phi' is not in (0, 1)" >&2; exit 2; }
+done
+export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1
+launch=()
+[ "$ranks" -gt 1 ] && launch=(mpirun --allow-run-as-root --oversubscribe -np "$ranks")
+status=0
+for phi in "${phis[@]}"; do
+  dir=$out/phi$phi
+  args=(--set "run.end_time_tref=$tref" -o "$dir" --quiet)
+  if [ -e "$dir/checkpoint.h5" ]; then
+    args=(--restart "${args[@]}")
+  else
+    args=("$repo/data/scenes/pipeline_demo.toml" --set "particles.solids_fraction=$phi"
+          --set "domain.size_dp=[53,213,53]" --set contact.gamma_star=2e-3 "${args[@]}")
+  fi
+  echo "developed_states.sh: phi = $phi to $tref t_ref -> $dir"
+  "${launch[@]}" "$gen" "${args[@]}" || { echo "developed_states.sh: the run at phi = $phi failed" >&2; status=1; }
+done
+[ $status -eq 0 ] && echo "time them with: build/bench/cgd-bench-developed --from-run $out/phi<phi>"
+exit $status
