@@ -182,6 +182,7 @@ std::optional<FluidConfig> read_fluid(const SceneReader& in, const ToolAccepts& 
     f.drag = drag_law(in, accepts);
     if (auto v = in.boolean("fluid", "pressure_gradient_force")) f.pressure_gradient_force = *v;
     if (auto v = in.boolean("fluid", "parcel_correction")) f.parcel_correction = *v;
+    if (auto v = in.boolean("fluid", "drag_own_deposit")) f.drag_own_deposit = *v;
     if (auto v = in.string("fluid", "drag_model")) f.drag_model_path = *v;
     if (auto v = in.string("fluid", "drag_model_checksum")) f.drag_model_checksum = *v;
     if (f.drag == DragLaw::Model && f.drag_model_path.empty())

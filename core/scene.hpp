@@ -61,6 +61,9 @@ struct FluidConfig {
   DragLaw drag = DragLaw::Beetstra;
   bool pressure_gradient_force = true;
   bool parcel_correction = true;      // filtered laws: c_corr(alpha) on (false: c_corr = 1, for the parcel fit)
+  // the drag law's phi at a particle includes the particle's own deposit (true, the usual CFD-DEM); false: that
+  // share, V_p alpha^3 sum_c w_c^2 / V_cell, is taken out of it (issue 28's diagnostic of the parcels' self-bias)
+  bool drag_own_deposit = true;
   std::string drag_model_path;        // fluid.drag_model: model file of drag = "model" (cgd-fit), as given
   std::string drag_model_checksum;    // its FNV-1a checksum (16 hex digits), recorded in the effective scene
   // drag = "model": the file, read once by load_scene and checked there against the scene's physical

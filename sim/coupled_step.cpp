@@ -50,6 +50,7 @@ CoupledStep::CoupledStep(const Scene& scene, fluid::FluidGrid& grid, double dt_d
   cs.particle_mass_kg = scene.derived.parcel_mass_kg;
   cs.two_way = f.coupling == Coupling::TwoWay;
   cs.pressure_gradient_force = f.pressure_gradient_force;
+  cs.drag_own_deposit = f.drag_own_deposit;
   cs.void_fraction_floor = scene.numerics.void_fraction_floor;
   cs.particle_body_accel = driving.particle_body_accel_m_s2;
   coupler_ = std::make_unique<coupling::Coupler>(cs, grid_);

@@ -109,7 +109,13 @@ void Coupler::compute_drag(const dem::Particles& p, fluid::FluidState& state) {
         const double* q = cf + kRead * c;
         for (int m = 0; m < kRead; ++m) acc[m] += w * q[m];
       });
-      const double u[3] = {acc[0], acc[1], acc[2]}, gp[3] = {acc[3], acc[4], acc[5]}, phi_p = acc[6];
+      const double u[3] = {acc[0], acc[1], acc[2]}, gp[3] = {acc[3], acc[4], acc[5]};
+      double phi_p = acc[6];
+      if (!s_.drag_own_deposit) {  // the particle's own share of the phi it reads: per_cell sum_c w_c^2
+        double w2 = 0;
+        for_each_stencil_cell(view_, stencil_[i], [&](std::size_t, double w) { w2 += w * w; });
+        phi_p = std::max(0.0, phi_p - per_cell * w2);
+      }
       const double* v = &p.v[3 * i];
       double slip2 = 0;
       for (int d = 0; d < 3; ++d) {

@@ -6,7 +6,8 @@
 //                proportion, from the cells above the floor, so sum eps is unchanged and the fluid's
 //                continuity stays exact);
 //   2. drag      per particle: eps_p and u_p = sum_c w_pc u_c (cell-centred u^n), beta_p = law(phi_p,
-//                |u_p - v_p|) (core/drag.hpp; filtered laws core/filtered_drag.hpp), deposited as the cells' implicit drag
+//                |u_p - v_p|) (core/drag.hpp; filtered laws core/filtered_drag.hpp; with drag_own_deposit off
+//                phi_p less the particle's own share V_p w_pc^2 summed over its cells), deposited as the cells' implicit drag
 //                B_c = sum_p beta_p V_p w_pc / V_cell and B_c V_c = sum_p beta_p V_p v_p w_pc / V_cell;
 //   3. fluid     step with these (sim/fluid/solver.hpp; drag implicit: B dt/rho_f >> 1 is fine);
 //   4. forces    per particle, from u^{n+1} and p^{n+1} interpolated with the same weights:
@@ -50,6 +51,9 @@ struct CouplerSettings {
   double particle_mass_kg = 0;         // mass of one (parcel) particle
   bool two_way = true;                 // false: no momentum returned to the fluid (B = 0)
   bool pressure_gradient_force = true;
+  // false: the drag's phi_p leaves out the particle's own deposit, V alpha^3 sum_c w_pc^2 / V_cell (at least 0);
+  // eps of the fluid and every other use of phi keep it (scene key fluid.drag_own_deposit)
+  bool drag_own_deposit = true;
   double void_fraction_floor = 0.3;    // eps_min
   std::array<double, 3> particle_body_accel{};  // g less the mean pressure gradient's V_p G/m (coupled_step.hpp periodic_driving)
 };
