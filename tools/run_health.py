@@ -69,8 +69,11 @@ def windows(data, t_ref, u_t, n_particles, window, ranks):
     if len(t) < 2:
         return rows
     eps = 1e-9 * window  # times are multiples of dt_fluid / t_ref: an edge row must not fall out by round-off
-    # whole windows up to the last row (a last row a round-off past a window's end opens no window of its own)
     edges = window * np.arange(max(1, math.ceil((t[-1] - eps) / window)) + 1)
+    # a last stretch shorter than half a window (a run ends a fluid step past its end time) joins the window
+    # before it
+    if len(edges) > 2 and t[-1] - edges[-2] < 0.5 * window:
+        edges = np.delete(edges, -2)
     for a, b in zip(edges[:-1], edges[1:]):
         sel = np.nonzero((t > a + eps) & (t <= b + eps))[0]
         before = np.nonzero(t <= a + eps)[0]
