@@ -43,6 +43,7 @@ import argparse
 import glob
 import math
 import os
+import signal
 import sys
 
 import h5py
@@ -250,6 +251,7 @@ def plot(results, prefix):
 
 
 def main():
+    signal.signal(signal.SIGPIPE, signal.SIG_DFL)  # `| head` closes the pipe: no traceback
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--resolved", action="append", default=[], help="a resolved run directory (repeat: pooled)")
     ap.add_argument("--coarse", action="append", default=[], help="a coarse run directory (repeat: one row each)")

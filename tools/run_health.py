@@ -21,6 +21,7 @@ Exit status 0; 2 for a file that is not a readable series (the message names the
 import argparse
 import math
 import os
+import signal
 import sys
 
 import h5py
@@ -114,6 +115,7 @@ def cells(r):
 
 
 def main():
+    signal.signal(signal.SIGPIPE, signal.SIG_DFL)  # `| head` closes the pipe: no traceback
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("run", help="a run directory (holding series.h5) or a series file")
     ap.add_argument("--window", type=float, default=5.0, help="t_ref per row (default 5)")
