@@ -3,7 +3,8 @@
 filtered solids fraction alone can miss the slip.
 
 Every run -- resolved (cgd-generate) or coarse (cgd-coarse) -- is seen through one and the same operator: the
-box filter of its snapshots onto a grid of N cells across the box width (N x N*Ly/Lx x N cubes). For each
+box filter of its snapshots onto a grid of N cells across the box width (N x round(N Ly/Lx) x round(N Lz/Lx)
+cells, as the engine makes a grid of fluid.dx_over_dp = Lx/N; refused if they are more than 10 % from cubes). For each
 snapshot of the window t >= T t_ref, per coarse cell c:
 
   phi_c   the solids volume of the particles (parcels: alpha^3 particle volumes) whose centre lies in c, over
@@ -18,8 +19,10 @@ Per run (means over the window's snapshots; slips over u_t):
 
   domain slip   <eps u>/<eps> - <v>: the run's own domain slip (docs/models.md; its series' slip_velocity);
   local slip    the particle-weighted mean of s_c: the slip a closure in phi_c sees on average;
-  drift         domain slip - local slip: the sub-grid drift, the part of the slip made by the correlation
-                of particles and fluid below the grid (a phi-only closure has no hold on it);
+  drift         domain slip - local slip: the resolved-scale drift, the part of the slip made by the
+                correlation of phi_c and u_c between the cells (the gas bypassing the dense cells at the grid's
+                scale: 0 on a one-cell grid, growing as the grid is refined); a coarse run must build it with its
+                own grid-scale structures, the closure acting on the local slip only;
   phi spread    the particle-weighted mean and standard deviation of phi_c, its 99th percentile, and the
                 fraction of the particles in cells above 2.2 <phi> (the dense tail);
   p support     -<dp/dy> over the particles (particles/pressure_gradient plus the removed mean gradient
@@ -76,6 +79,17 @@ def overlap_matrix(n_fine, h_fine, origin, n_coarse, h_coarse):
     return w
 
 
+def snapshot_time(path):
+    """The snapshot's time (s), read alone: the window is chosen before the arrays are read."""
+    try:
+        with h5py.File(path, "r") as f:
+            if "time" not in f.attrs or "params" not in f or "t_ref_s" not in f["params"].attrs:
+                fail(f"{path}: no time attribute or /params@t_ref_s: not a cgd snapshot")
+            return float(f.attrs["time"]), float(f["params"].attrs["t_ref_s"])
+    except OSError as e:
+        fail(f"{path}: not a readable HDF5 file ({e})")
+
+
 def snapshot_cells(path, n_cells):
     """Per coarse cell of one snapshot: solids volume, particle volume x velocity (y), fluid <eps> and <eps u_y>
     volumes; and the run's constants."""
@@ -118,25 +132,28 @@ def snapshot_cells(path, n_cells):
         consts = dict(box=box, u_t=float(p["u_t_m_s"]), t_ref=float(p["t_ref_s"]), rho_p=float(p["density_kg_m3"]),
                       rho_f=float(p["fluid_density_kg_m3"]), g=abs(float(np.asarray(p["gravity_m_s2"])[1])),
                       vol=vol)
-    h = box[0] / n_cells
-    ny = int(round(box[1] / h))
-    if abs(ny * h - box[1]) > 1e-9 * box[1] or abs(n_cells * h - box[2]) > 1e-9 * box[2]:
-        fail(f"{path}: a grid of {n_cells} cubes across {box[0]:.4g} m does not tile the box {box.tolist()}")
-    grid = (n_cells, ny, n_cells)
+    # N cells across x, the same size along z (N x Lz/Lx), and the nearest whole number along y: the coarse
+    # grid the engine makes of fluid.dx_over_dp = Lx/N (the half box's 53 x 213 x 53 d_p: 4 x 16 x 4 cells of
+    # 13.25 x 13.31 x 13.25 d_p)
+    grid = (n_cells, max(1, int(round(n_cells * box[1] / box[0]))), max(1, int(round(n_cells * box[2] / box[0]))))
+    hs = box / np.array(grid)
+    if np.max(hs) > 1.1 * np.min(hs):
+        fail(f"{path}: {n_cells} cells across gives cells of {hs.tolist()} m in the box {box.tolist()}: "
+             "more than 10 % from cubes")
     # particles: nearest-grid-point deposit (positions wrapped into the periodic box)
     xw = np.mod(x, box)
-    idx = np.minimum((xw / h).astype(int), np.array(grid) - 1)
+    idx = np.minimum((xw / hs).astype(int), np.array(grid) - 1)
     flat = (idx[:, 2] * grid[1] + idx[:, 1]) * grid[0] + idx[:, 0]
     ncell = grid[0] * grid[1] * grid[2]
     solids = np.bincount(flat, minlength=ncell) * vol
     momentum = np.bincount(flat, weights=v[:, 1], minlength=ncell) * vol
     # fluid: overlap-weighted volume sums onto the coarse cells (separable)
-    wx = overlap_matrix(cells_f[0], spacing[0], origin[0], grid[0], h)
-    wy = overlap_matrix(cells_f[1], spacing[1], origin[1], grid[1], h)
-    wz = overlap_matrix(cells_f[2], spacing[2], origin[2], grid[2], h)
+    wx = overlap_matrix(cells_f[0], spacing[0], origin[0], grid[0], hs[0])
+    wy = overlap_matrix(cells_f[1], spacing[1], origin[1], grid[1], hs[1])
+    wz = overlap_matrix(cells_f[2], spacing[2], origin[2], grid[2], hs[2])
     e_c = np.einsum("zk,yj,xi,kji->zyx", wz, wy, wx, eps).reshape(-1)
     eu_c = np.einsum("zk,yj,xi,kji->zyx", wz, wy, wx, eu).reshape(-1)
-    cell_volume = h ** 3
+    cell_volume = float(np.prod(hs))
     fine_volume = float(np.prod(spacing))
     return dict(t=t, flat=flat, solids=solids, momentum=momentum, e=e_c, eu=eu_c, cell_volume=cell_volume,
                 n=n, v_mean=float(v[:, 1].mean()), dpdy_mean=float(dpdy.mean()),
@@ -159,9 +176,10 @@ def analyse(runs, n_cells, from_tref, bin_width):
         files, _ = run_snapshots(run, from_tref)
         used = 0
         for path in files:
-            s = snapshot_cells(path, n_cells)
-            if not s["t"] >= from_tref * s["t_ref"] - 1e-12:
+            t, t_ref = snapshot_time(path)
+            if not t >= from_tref * t_ref * (1 - 1e-9):
                 continue
+            s = snapshot_cells(path, n_cells)
             used += 1
             consts = s
             occupied = s["solids"] > 0

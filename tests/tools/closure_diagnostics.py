@@ -8,9 +8,10 @@ x = 3.5 m (wrapped to 1.5: v_y = -0.4); u_t = 1 m/s. Then
   phi (particle-weighted) mean 0.025, std sqrt(0.0007 - 0.025^2); <phi> = 0.005, tail phi > 0.011: 75 %;
   pressure support: G_y = -59.95 (the mixture weight at rho_p 1000, rho_f 1, g 10) plus the particles' own
   -10, -10, -10, +10 Pa/m: 64.95 / 59.95.
-A snapshot before --from-tref (different numbers) must be left out; the fine-to-coarse overlap of a grid that
-does not divide the coarse one (3 fine cells on 2 coarse); the refusals (a missing dataset, a grid that does not
-tile the box): exit 2, no traceback.
+On one cell the drift is 0 (local slip = domain slip). A snapshot before --from-tref (different numbers)
+must be left out; the fine-to-coarse overlap of a grid that
+does not divide the coarse one (3 fine cells on 2 coarse); the refusals (a missing dataset, cells more than 10 %
+from cubes): exit 2, no traceback.
 usage: /usr/bin/python3 tests/tools/closure_diagnostics.py SOURCE_DIR"""
 import math
 import os
@@ -85,13 +86,15 @@ with tempfile.TemporaryDirectory() as tmp:
     check(abs(b0["fraction"] - 0.25) < 1e-12 and abs(b0["slip"] - 2.4) < 1e-12 and
           abs(b1["fraction"] - 0.75) < 1e-12 and abs(b1["slip"] - 0.8) < 1e-12,
           f"per bin: 25 % at slip 2.4, 75 % at 0.8 ({b0}, {b1})")
+    r1 = cd.analyse([run], 1, 1.0, 0.02)  # one cell: the local slip is the domain slip, no drift
+    check(abs(r1["drift"]) < 1e-12 and abs(r1["local"] - domain) < 1e-12, f"one cell: drift 0 ({r1['drift']})")
     w = cd.overlap_matrix(3, 2.0 / 3.0, 0.0, 2, 1.0)
     check(np.allclose(w, [[2 / 3, 1 / 3, 0], [0, 1 / 3, 2 / 3]]), f"overlap of 3 fine cells on 2 coarse ({w.tolist()})")
     out = subprocess.run([sys.executable, tool, "--resolved", run, "--cells", "2", "--from-tref", "1"],
                          capture_output=True, text=True)
     check(out.returncode == 0 and "| resolved | 1 | 0.005 |" in out.stdout, "the table of the command line")
     for label, kw, cells in (("a missing dataset", {"drop": "eps_velocity"}, "2"),
-                             ("a grid that does not tile the box", {"box": (2.0, 2.5, 2.0)}, "2")):
+                             ("cells far from cubes", {"box": (2.0, 2.5, 2.0)}, "2")):
         bad = os.path.join(tmp, "bad")
         os.makedirs(os.path.join(bad, "snapshots"), exist_ok=True)
         snapshot(os.path.join(bad, "snapshots", "snap_1.h5"), 2.0, [0.1, 0.2, 0.3, -0.4], **kw)
