@@ -36,7 +36,7 @@ Per run (means over the window's snapshots; slips over u_t):
                 (the conditional slip: the closure's own target, bin by bin).
 
 usage: /usr/bin/python3 tools/closure_diagnostics.py --resolved RUN [--resolved RUN]... [--coarse RUN]...
-           --cells N [--from-tref T] [--bin 0.02] [-o PREFIX]
+           --cells N [--from-tref T] [--coarse-from-tref T] [--bin 0.02] [-o PREFIX]
 RUN is a run directory (snapshots/*.h5); several --resolved runs (seeds) are pooled as one reference; each
 --coarse run is a row of its own (its label: the directory's name). Writes PREFIX.md (the tables) and
 PREFIX.png (phi distributions and conditional slip) with -o; prints the tables.
@@ -217,9 +217,10 @@ def analyse(runs, n_cells, from_tref, bin_width):
                 tail=float(np.mean(phi_p > 2.2 * phi_mean)), bins=bins, phi_p=phi_p)
 
 
-def tables(results, n_cells, from_tref):
+def tables(results, n_cells, from_tref, coarse_from_tref=None):
+    window = f"{from_tref:g} t_ref" + ("" if coarse_from_tref is None else f" (coarse runs: {coarse_from_tref:g})")
     out = [f"Runs seen on the grid of {n_cells} cells across (box filter, nearest-grid-point particles), "
-           f"snapshots from {from_tref:g} t_ref; slips over u_t; ± snapshot scatter / sqrt(count), a lower bound "
+           f"snapshots from {window}; slips over u_t; ± snapshot scatter / sqrt(count), a lower bound "
            "(correlated snapshots).", "",
            "| run | snapshots | <phi> | domain slip | local slip | drift | phi (pw) mean / std / p99 | "
            "particles at phi > 2.2 <phi> | p support |", "|---|---|---|---|---|---|---|---|---|"]
@@ -275,6 +276,9 @@ def main():
     ap.add_argument("--coarse", action="append", default=[], help="a coarse run directory (repeat: one row each)")
     ap.add_argument("--cells", type=int, required=True, help="cells across the box width of the common grid")
     ap.add_argument("--from-tref", type=float, default=20.0, help="first snapshot time, t_ref (default 20)")
+    ap.add_argument("--coarse-from-tref", type=float, default=None,
+                    help="first snapshot time of the coarse runs, t_ref (default: --from-tref; a coarse run's "
+                         "homogeneous transient lasts longer: the pipeline samples PROFILE=half's from 40)")
     ap.add_argument("--bin", type=float, default=0.02, help="phi bin width (default 0.02)")
     ap.add_argument("-o", dest="prefix", help="write PREFIX.md and PREFIX.png")
     a = ap.parse_args()
@@ -290,8 +294,10 @@ def main():
     results = [("resolved" + (f" ({len(a.resolved)} runs)" if len(a.resolved) > 1 else ""),
                 analyse(a.resolved, a.cells, a.from_tref, a.bin))]
     for run in a.coarse:
-        results.append((os.path.basename(os.path.normpath(run)), analyse([run], a.cells, a.from_tref, a.bin)))
-    text = tables(results, a.cells, a.from_tref)
+        results.append((os.path.basename(os.path.normpath(run)),
+                        analyse([run], a.cells, a.from_tref if a.coarse_from_tref is None else a.coarse_from_tref,
+                                a.bin)))
+    text = tables(results, a.cells, a.from_tref, a.coarse_from_tref)
     print(text)
     if a.prefix:
         with open(a.prefix + ".md", "w") as f:
