@@ -171,7 +171,6 @@ def run_snapshots(run, from_tref):
 def analyse(runs, n_cells, from_tref, bin_width):
     """Pooled figures of one or more runs (their window's snapshots)."""
     phi_all, slip_all, rows = [], [], []
-    consts = None
     for run in runs:
         files, _ = run_snapshots(run, from_tref)
         used = 0
@@ -179,24 +178,23 @@ def analyse(runs, n_cells, from_tref, bin_width):
             t, t_ref = snapshot_time(path)
             if not t >= from_tref * t_ref * (1 - 1e-9):
                 continue
-            s = snapshot_cells(path, n_cells)
+            snap = snapshot_cells(path, n_cells)
             used += 1
-            consts = s
-            occupied = s["solids"] > 0
-            phi = s["solids"] / s["cell_volume"]
-            v_c = np.where(occupied, s["momentum"] / np.where(occupied, s["solids"], 1.0), 0.0)
-            u_c = s["eu"] / s["e"]
-            slip_c = (u_c - v_c) / s["u_t"]
-            weight = s["solids"] / s["solids"].sum()  # particle (volume) weight of each cell
-            phi_p = phi[s["flat"]]                    # each particle's cell phi
-            slip_p = slip_c[s["flat"]]
+            occupied = snap["solids"] > 0
+            phi = snap["solids"] / snap["cell_volume"]
+            v_c = np.where(occupied, snap["momentum"] / np.where(occupied, snap["solids"], 1.0), 0.0)
+            u_c = snap["eu"] / snap["e"]
+            slip_c = (u_c - v_c) / snap["u_t"]
+            weight = snap["solids"] / snap["solids"].sum()  # particle (volume) weight of each cell
+            phi_p = phi[snap["flat"]]                    # each particle's cell phi
+            slip_p = slip_c[snap["flat"]]
             phi_all.append(phi_p)
             slip_all.append(slip_p)
-            domain = (s["u_domain"] - s["v_mean"]) / s["u_t"]
+            domain = (snap["u_domain"] - snap["v_mean"]) / snap["u_t"]
             local = float(np.sum(weight * slip_c))
-            weight_mix = (s["rho_p"] * s["phi_mean"] + s["rho_f"] * (1 - s["phi_mean"])) * s["g"]
+            weight_mix = (snap["rho_p"] * snap["phi_mean"] + snap["rho_f"] * (1 - snap["phi_mean"])) * snap["g"]
             rows.append(dict(domain=domain, local=local, drift=domain - local,
-                             support=-s["dpdy_mean"] / weight_mix, phi_mean=s["phi_mean"]))
+                             support=-snap["dpdy_mean"] / weight_mix, phi_mean=snap["phi_mean"]))
         if used == 0:
             fail(f"{run}: no snapshot at or after {from_tref} t_ref")
     phi_p = np.concatenate(phi_all)
@@ -253,10 +251,10 @@ def plot(results, prefix):
     import matplotlib.pyplot as plt
     fig, ax = plt.subplots(1, 2, figsize=(11, 4.2))
     for label, r in results:
-        lo = np.array([b["lo"] for b in r["bins"]])
+        lo = np.array([bn["lo"] for bn in r["bins"]])
         w = r["bins"][0]["hi"] - r["bins"][0]["lo"]
-        frac = np.array([b["fraction"] for b in r["bins"]])
-        slip = np.array([b["slip"] for b in r["bins"]])
+        frac = np.array([bn["fraction"] for bn in r["bins"]])
+        slip = np.array([bn["slip"] for bn in r["bins"]])
         ax[0].step(lo + w, frac / w, where="pre", label=label)
         keep = frac > 1e-3
         ax[1].plot(lo[keep] + w / 2, slip[keep], "o-", ms=3, label=label)
