@@ -8,11 +8,10 @@
 
 #include "core/h5.hpp"
 #include "core/scene.hpp"
+#include "core/schema/check.hpp"  // kFormatVersion
 #include "core/series.hpp"  // schema::Series, the run's series.h5
 
 namespace cgd::schema {
-
-inline constexpr std::int64_t kFormatVersion = 1;
 
 /// Root attributes every cgd file carries: cgd_format, cgd_format_version, code_version, created
 /// (ISO 8601 UTC), scene (the effective scene as TOML text); and group /params with every physical

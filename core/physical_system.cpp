@@ -59,15 +59,7 @@ double gravity_from_scales(double u_t_m_s, double l_char_m, double diameter_m) {
 }
 
 void check_derived_format(const h5::File& f, const char* format, const std::string& what, const std::string& hint) {
-  const std::string& path = f.path();
-  for (const char* key : {"cgd_format", "cgd_format_version"})
-    if (!f.has_attr("/", key)) throw InputError(path + ": " + what + " lacks the root attribute " + key);
-  const std::string given = f.attr_string("/", "cgd_format");
-  if (given != format)
-    throw InputError(path + ": cgd_format = \"" + given + "\": not a " + what + " (" + hint + ")");
-  if (f.attr_int("/", "cgd_format_version") != schema::kFormatVersion)
-    throw InputError(path + ": cgd_format_version = " + std::to_string(f.attr_int("/", "cgd_format_version")) +
-                     ": this build reads version " + std::to_string(schema::kFormatVersion));
+  schema::check_format(f, format, what, hint);
 }
 
 void write_physical_system(h5::File& f, const PhysicalSystem& system, const char* law_key) {

@@ -1,0 +1,68 @@
+#pragma once
+// Validating reads, shared by every format's reader (docs/schema-run.md "What the readers check"): the
+// format and its version, the checksum seal of a version-2 file, a dataset's shape, finite values. Each
+// check throws an InputError of one line naming the file, the dataset or attribute, what was found and
+// what was expected; the tools turn it into exit status 2 before they write anything.
+#include <mpi.h>
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "core/h5.hpp"
+
+namespace cgd::schema {
+
+/// The format version this build writes: 2 (every file sealed with its checksum, core/h5.hpp).
+inline constexpr std::int64_t kFormatVersion = 2;
+/// The oldest version this build reads: 1 (the same names; no seal, so damage inside the file's data can
+/// go unnoticed). Version 1 files are read as they always were (docs/schema-run.md "Versions").
+inline constexpr std::int64_t kOldestFormatVersion = 1;
+
+/// A dimension that may take any extent in an expected shape.
+inline constexpr std::uint64_t kAnyExtent = ~std::uint64_t{0};
+
+/// Checks the root attributes cgd_format (= `format`) and cgd_format_version (kOldestFormatVersion ..
+/// kFormatVersion), and that a file of version 2 or later carries a valid seal. `what` names the kind
+/// ("snapshot", "filtered file"), `hint` says which files are expected. Returns the version.
+std::int64_t check_format(const h5::File& f, const char* format, const std::string& what, const std::string& hint);
+
+/// "(1408, 3)".
+std::string shape_text(const std::vector<std::uint64_t>& dims);
+
+/// The dataset's shape, checked against `expected` (kAnyExtent matches any extent). InputError "no
+/// dataset" / "has shape (...), expected (...)"; `why` (e.g. "N = 1408 particles") is appended.
+std::vector<std::uint64_t> require_shape(const h5::File& f, const std::string& dataset,
+                                         const std::vector<std::uint64_t>& expected, const std::string& why = "");
+
+/// Where values must be finite: nowhere, everywhere, or in the rows whose `count` is positive (per-bin
+/// arrays of the filtered file: empty bins hold NaN).
+enum class Finite { Not, Everywhere };
+
+/// Reads a float64 dataset of shape `expected` (require_shape) and checks it finite when asked.
+std::vector<double> read_doubles(const h5::File& f, const std::string& dataset,
+                                 const std::vector<std::uint64_t>& expected, Finite finite,
+                                 const std::string& why = "");
+/// Reads an integer dataset of shape `expected`; InputError if it is stored as floating point.
+std::vector<std::int64_t> read_ints(const h5::File& f, const std::string& dataset,
+                                    const std::vector<std::uint64_t>& expected, const std::string& why = "");
+
+/// InputError naming `dataset` of `path` and the first non-finite value (its flat index and row of
+/// `row_width` values), unless every value is finite.
+void require_finite(const std::string& path, const std::string& dataset, const double* values, std::size_t n,
+                    std::size_t row_width = 1);
+/// The same for the rows whose count[i] > 0 (per-bin arrays: values.size() == count.size()).
+void require_finite_where_counted(const std::string& path, const std::string& dataset,
+                                  const std::vector<double>& values, const std::vector<std::int64_t>& count);
+
+/// A float attribute that must be finite (attr_double, then the check).
+double finite_attr(const h5::File& f, const std::string& object, const std::string& name);
+/// Float-array attribute with `n` values (n = kAnyExtent: any number), each finite.
+std::vector<double> finite_attrs(const h5::File& f, const std::string& object, const std::string& name,
+                                 std::uint64_t n = kAnyExtent);
+
+/// Collective: if any rank of `comm` has a non-empty `local_error`, every rank throws InputError with the
+/// message of the lowest such rank (so all ranks end with the same status and nobody waits in a collective).
+void throw_if_any(MPI_Comm comm, const std::string& local_error);
+
+}  // namespace cgd::schema
