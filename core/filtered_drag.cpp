@@ -81,6 +81,21 @@ double Radl2014Curves::a(double phi) const {
   return piecewise(kRadlA, phi);
 }
 
+namespace {
+template <std::size_t N>
+std::vector<Radl2014Curves::Piece> pieces_of(const std::array<CubicPiece, N>& pieces) {
+  std::vector<Radl2014Curves::Piece> out;
+  for (const CubicPiece& p : pieces) out.push_back({p.phi_lo, p.phi_hi, p.phi0, p.c0, p.c1, p.c2, p.c3});
+  return out;
+}
+}  // namespace
+std::vector<Radl2014Curves::Piece> Radl2014Curves::h_pieces() {
+  return pieces_of(kRadlH);
+}
+std::vector<Radl2014Curves::Piece> Radl2014Curves::a_pieces() {
+  return pieces_of(kRadlA);
+}
+
 double BSpline::operator()(double x) const {
   const int k = order;
   const std::size_t n = coefficients.size();

@@ -49,6 +49,13 @@ struct Radl2014Curves {
   static constexpr double kCcorrA = 0.0, kCcorrK = 0.05;  // the paper's c_corr parameters
   double h(double phi) const;
   double a(double phi) const;
+  /// One piece as evaluated: c0 + c1 x + c2 x^2 + c3 x^3, x = phi - phi0, on phi_lo <= phi < phi_hi (the
+  /// last piece also takes phi >= phi_hi). For the exporter (fit/export_model.hpp).
+  struct Piece {
+    double phi_lo, phi_hi, phi0, c0, c1, c2, c3;
+  };
+  static std::vector<Piece> h_pieces();
+  static std::vector<Piece> a_pieces();
 };
 
 /// A B-spline s(x) = sum_j c_j B_j,k(x) of order k (degree k - 1) on the full knot vector t

@@ -11,12 +11,9 @@
 // entry cannot disagree: what h5ls shows, ParaView shows.
 // XDMF lists CoRectMesh dimensions, origin and spacing slowest axis first, i.e. (z, y, x), which
 // matches the (n_z, n_y, n_x) layout of the arrays in the file.
-#include <fcntl.h>
 #include <hdf5.h>
-#include <unistd.h>
 
 #include <algorithm>
-#include <cerrno>
 #include <charconv>
 #include <cstdio>
 #include <cstring>
@@ -28,6 +25,7 @@
 #include "core/error.hpp"
 #include "core/h5.hpp"
 #include "core/output.hpp"
+#include "core/text_file.hpp"
 
 namespace cgd::schema {
 namespace {
@@ -206,30 +204,7 @@ void write_xdmf(const std::string& run_dir, const std::vector<XdmfFrame>& frames
     << "</Xdmf>\n";
   const std::string text = x.str();
 
-  // Atomically: write a temporary file in the same folder, fsync, rename.
-  const std::string final_path = (std::filesystem::path(run_dir) / "run.xmf").string();
-  const std::string tmp_path = final_path + ".tmp";
-  auto fail = [&](int error) {
-    std::remove(tmp_path.c_str());
-    throw RunError(final_path + ": cannot write (" + std::strerror(error) + ")");
-  };
-  const int fd = ::open(tmp_path.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-  if (fd < 0) fail(errno);
-  std::size_t written = 0;
-  while (written < text.size()) {
-    const ssize_t n = ::write(fd, text.data() + written, text.size() - written);
-    if (n < 0) {
-      if (errno == EINTR) continue;
-      const int error = errno;
-      ::close(fd);
-      fail(error);
-    }
-    written += static_cast<std::size_t>(n);
-  }
-  int error = ::fsync(fd) != 0 ? errno : 0;
-  if (::close(fd) != 0 && error == 0) error = errno;
-  if (error != 0) fail(error);
-  if (std::rename(tmp_path.c_str(), final_path.c_str()) != 0) fail(errno);
+  write_text_atomically(std::filesystem::path(run_dir) / "run.xmf", text);
 }
 
 }  // namespace cgd::schema

@@ -11,10 +11,10 @@ set -euo pipefail
 repo=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
 build_dir="$repo/build"
 
-packages=(build-essential cmake pkg-config git
+packages=(build-essential gfortran cmake pkg-config git
           libhdf5-openmpi-dev hdf5-tools libgsl-dev libeigen3-dev libopenmpi-dev openmpi-bin
           libfftw3-dev libfftw3-mpi-dev libtomlplusplus-dev libcli11-dev libgtest-dev libbenchmark-dev
-          python3 python3-h5py python3-numpy python3-matplotlib time)
+          python3 python3-h5py python3-numpy python3-matplotlib python3-scipy time)
 bench_packages=(lammps)
 
 with_bench=0

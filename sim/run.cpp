@@ -20,6 +20,7 @@
 #include "core/h5.hpp"
 #include "core/output.hpp"
 #include "core/series.hpp"
+#include "core/text_file.hpp"
 #include "core/timers.hpp"
 #include "sim/coupled_step.hpp"
 #include "sim/dem/placement.hpp"
@@ -43,16 +44,6 @@ std::string snapshot_name(std::int64_t step) {
   char buf[64];
   std::snprintf(buf, sizeof buf, "snap_%09lld.h5", static_cast<long long>(step));
   return buf;
-}
-
-void write_text_atomically(const fs::path& path, const std::string& text) {
-  const fs::path tmp = path.string() + ".tmp";
-  {
-    std::ofstream out(tmp);
-    out << text;
-    if (!out) throw RunError(tmp.string() + ": cannot write");
-  }
-  fs::rename(tmp, path);
 }
 
 

@@ -126,7 +126,10 @@ def main():
         ax[2].fill_between(b["F"], b["H_low"][:, i], b["H_high"][:, i], color=line.get_color(), alpha=0.2)
         if data is not None:
             fitted = data["fitted"] == 1
-            for mask, marker in ((fitted, "o"), (~fitted, "s")):
+            finite = np.isfinite(data["H"][:, j]) & np.isfinite(data["H_sigma"][:, j])
+            for mask, marker in ((fitted & finite, "o"), (~fitted & finite, "s")):
+                if not mask.any():
+                    continue
                 ax[2].errorbar(data["F"][mask], data["H"][mask, j], yerr=1.96 * data["H_sigma"][mask, j], fmt=marker,
                                ms=3, color=line.get_color(), mfc=None if marker == "o" else "none")
         ax[2].plot(F, rh(phi[i]) / (1 + ra(phi[i]) * F), "--", color=line.get_color(), lw=0.8)
