@@ -124,7 +124,7 @@ std::string describe(const Comparison& c) {
 void write_summary(const std::string& path, const Scene& scene, const SlipSummary& s,
                    const std::optional<Comparison>& cmp, const std::string& drag) {
   h5::write_atomically(path, MPI_COMM_SELF, [&](h5::File& f) {
-    schema::write_common(f, "coarse_summary", scene);
+    schema::write_common(f, schema::kCoarseSummary, scene);
     const std::string g = "/";
     f.set_attr(g, "drag", drag);
     f.set_attr(g, "parcel_size", scene.particles.parcel_size);

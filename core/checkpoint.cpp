@@ -24,7 +24,7 @@ void write(const std::string& path, MPI_Comm comm, const Scene& scene, const Run
     frame_counts.push_back(f.particle_count);
   }
   h5::write_atomically(path, comm, [&](h5::File& file) {
-    schema::write_common(file, "checkpoint", scene);
+    schema::write_common(file, schema::kCheckpoint, scene);
     file.set_attr("/", "step", state.step);
     file.set_attr("/", "time", state.time_s);
     file.set_attr("/", "displacement_bound", state.displacement_bound_m);
@@ -58,13 +58,11 @@ void write(const std::string& path, MPI_Comm comm, const Scene& scene, const Run
       for (std::size_t k = 0; k < kFluidFieldNames.size(); ++k)
         file.write_rows(std::string("/fluid/") + kFluidFieldNames[k], fluid->fields[k], fluid->cells, 1);
     }
-  });
+  }, h5::Seal::Yes);  // a restart must never run on damaged bytes (schema::kCheckpoint)
 }
 
 namespace {
 
-constexpr const char* kWhat = "checkpoint";
-constexpr const char* kHint = "the checkpoint.h5 of a run directory, written by cgd-generate or cgd-coarse";
 
 std::int64_t sum(const std::vector<std::int64_t>& v) {
   std::int64_t s = 0;
@@ -78,7 +76,7 @@ Reader::Reader(const std::string& path, MPI_Comm comm) : file_(h5::File::open_re
   // Everything below reads metadata every rank sees alike, so every rank throws the same InputError;
   // the values (scan_values) are checked in slices, with one collective verdict.
   const h5::File& f = file_;
-  schema::check_format(f, "checkpoint", kWhat, kHint);
+  schema::check_format(f, schema::kCheckpoint);
   auto nonnegative = [&](const char* name, std::int64_t v) {
     if (v < 0)
       throw InputError(path + ": attribute '" + name + "' of '/' is " + std::to_string(v) + ", expected >= 0");

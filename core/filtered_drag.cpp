@@ -208,8 +208,9 @@ BSpline read_spline(const h5::File& f, const std::string& group) {
   if (!f.exists(group)) throw InputError(path + ": drag model file lacks the group " + group);
   BSpline s;
   s.order = static_cast<int>(f.attr_int(group, "order"));
-  s.knots = f.read_double(group + "/knots");
-  s.coefficients = f.read_double(group + "/coefficients");
+  s.knots = schema::read_doubles(f, group + "/knots", {schema::kAnyExtent}, schema::Finite::Everywhere);
+  s.coefficients =
+      schema::read_doubles(f, group + "/coefficients", {schema::kAnyExtent}, schema::Finite::Everywhere);
   const std::size_t n = s.coefficients.size();
   const bool sorted = std::is_sorted(s.knots.begin(), s.knots.end());
   if (s.order < 1 || s.order > 15 || n < static_cast<std::size_t>(s.order) ||
@@ -218,8 +219,6 @@ BSpline read_spline(const h5::File& f, const std::string& group) {
         path + ": " + group +
         ": not a valid B-spline (needs 1 <= order <= 15, len(knots) = len(coefficients) + order, "
         "non-decreasing knots spanning an interval)");
-  for (double c : s.coefficients)
-    if (!std::isfinite(c)) throw InputError(path + ": " + group + "/coefficients: not finite");
   return s;
 }
 
@@ -230,7 +229,7 @@ DragModel load_drag_model(const std::string& path) {
   auto need = [&](const char* key) {
     if (!f.has_attr("/", key)) throw InputError(path + ": drag model file lacks the root attribute " + key);
   };
-  check_derived_format(f, "drag_model", "drag model file", "expected \"drag_model\", written by cgd-fit");
+  schema::check_format(f, schema::kDragModel);
   DragModel m;
   m.path = path;
   for (const char* key : {"u_t_convention", "phi_crit", "h_max"}) need(key);
@@ -239,20 +238,21 @@ DragModel load_drag_model(const std::string& path) {
   if (m.u_t_convention != kUtConvention)
     throw InputError(path + ": u_t_convention = \"" + m.u_t_convention + "\": this build uses \"" +
                      kUtConvention + "\" (docs/models.md)");
-  m.phi_crit = f.attr_double("/", "phi_crit");
-  m.h_max = f.attr_double("/", "h_max");
+  m.phi_crit = schema::finite_attr(f, "/", "phi_crit");
+  m.h_max = schema::finite_attr(f, "/", "h_max");
   if (!(m.l_char_m > 0) || !(m.phi_crit > 0 && m.phi_crit < 1) || !(m.h_max > 0 && m.h_max < 1))
     throw InputError(path + ": l_char_m must be > 0, phi_crit and h_max in (0, 1)");
   // width_exponent arrived after version 1's first files: absent means the paper's form (n = 1)
-  m.width_exponent = f.has_attr("/", "width_exponent") ? f.attr_double("/", "width_exponent") : 1.0;
+  m.width_exponent = f.has_attr("/", "width_exponent") ? schema::finite_attr(f, "/", "width_exponent") : 1.0;
   if (!(m.width_exponent > 0 && m.width_exponent <= 10))
     throw InputError(path + ": width_exponent = " + number(m.width_exponent) + ": must be in (0, 10]");
   m.h_spline = read_spline(f, "/h");
   m.log_a_spline = read_spline(f, "/log_a");
   if (!f.exists("/c_corr")) throw InputError(path + ": drag model file lacks the group /c_corr");
-  m.c_corr_a = f.attr_double("/c_corr", "a");
-  m.c_corr_k = f.attr_double("/c_corr", "k");
+  m.c_corr_a = schema::finite_attr(f, "/c_corr", "a");
+  m.c_corr_k = schema::finite_attr(f, "/c_corr", "k");
   m.c_corr_source = f.attr_string("/c_corr", "source");
+  // the range of log a: +-inf when the per-bin fits set no bound, never NaN
   if (f.has_attr("/", "log_a_min")) m.log_a_min = f.attr_double("/", "log_a_min");
   if (f.has_attr("/", "log_a_max")) m.log_a_max = f.attr_double("/", "log_a_max");
   if (!(m.log_a_min <= m.log_a_max))
@@ -261,7 +261,7 @@ DragModel load_drag_model(const std::string& path) {
   if (f.has_attr("/", "operator")) m.calibration_operator = f.attr_string("/", "operator");
   if (m.calibration_operator != "box" && m.calibration_operator != "tsc-grid")
     throw InputError(path + ": operator = \"" + m.calibration_operator + "\": allowed \"box\" or \"tsc-grid\"");
-  if (f.has_attr("/", "calibrated_delta_m")) m.calibrated_delta_m = f.attr_doubles("/", "calibrated_delta_m");
+  if (f.has_attr("/", "calibrated_delta_m")) m.calibrated_delta_m = schema::finite_attrs(f, "/", "calibrated_delta_m");
   if (f.has_attr("/", "curves")) {
     const std::string curves = f.attr_string("/", "curves");
     if (curves != "splines" && curves != "table")

@@ -413,13 +413,13 @@ void write_replicated_impl(File& file, const std::string& name, const std::vecto
 
 // ---- File: lifetime -----------------------------------------------------------------------------------
 
-File File::create(const std::string& path, MPI_Comm comm) {
+File File::create(const std::string& path, MPI_Comm comm, Seal seal) {
   silence_hdf5_errors();
   Handle fapl(H5Pcreate(H5P_FILE_ACCESS), H5Pclose);
   H5Pset_fapl_mpio(fapl.get(), comm, MPI_INFO_NULL);
   H5Pset_coll_metadata_write(fapl.get(), 1);
   Handle fcpl(H5Pcreate(H5P_FILE_CREATE), H5Pclose);
-  H5Pset_userblock(fcpl.get(), kSealBytes);  // room for the checksum seal (write_atomically fills it)
+  if (seal == Seal::Yes) H5Pset_userblock(fcpl.get(), kSealBytes);  // room for the seal (write_atomically fills it)
   const hid_t id = H5Fcreate(path.c_str(), H5F_ACC_TRUNC, fcpl.get(), fapl.get());
   if (id < 0) throw RunError(path + ": cannot create HDF5 file (" + hdf5_error_text() + ")");
   return File(id, path, comm);
@@ -655,12 +655,13 @@ void File::write_replicated(const std::string& dataset, const std::vector<std::i
 // ---- free functions
 // ----------------------------------------------------------------------------------------
 
-void write_atomically(const std::string& final_path, MPI_Comm comm, const std::function<void(File&)>& body) {
+void write_atomically(const std::string& final_path, MPI_Comm comm, const std::function<void(File&)>& body,
+                      Seal seal) {
   const std::string tmp_path = final_path + ".tmp";
   int rank = 0;
   MPI_Comm_rank(comm, &rank);
   try {
-    File file = File::create(tmp_path, comm);
+    File file = File::create(tmp_path, comm, seal);
     body(file);
     file.close();
   } catch (...) {
@@ -671,7 +672,9 @@ void write_atomically(const std::string& final_path, MPI_Comm comm, const std::f
   int error = 0;
   if (rank == 0) {
     try {
-      seal_file(tmp_path);  // the checksum of the complete file into its user block
+      // the checksum of the complete file into its user block (a no-op for a file without one; a copy of a
+      // sealed file made by update_copy_atomically is sealed again)
+      seal_file(tmp_path);
     } catch (const RunError&) {
       error = EIO;
     }

@@ -14,13 +14,17 @@
 namespace cgd::h5 {
 
 class File;
+/// Whether a file gets cgd's checksum seal (kSealBytes below): only the formats that need it (checkpoints,
+/// core/schema/check.hpp) ask for it.
+enum class Seal { No, Yes };
 void update_copy_atomically(const std::string& source_path, const std::string& final_path,
                             const std::function<void(File&)>& body);
 
 class File {
  public:
-  /// Create (truncate) `path` for parallel writing over `comm`. Collective.
-  static File create(const std::string& path, MPI_Comm comm);
+  /// Create (truncate) `path` for parallel writing over `comm`; with Seal::Yes it starts with the user
+  /// block of the checksum seal (filled by write_atomically). Collective.
+  static File create(const std::string& path, MPI_Comm comm, Seal seal = Seal::No);
   /// Open an existing file read-only over `comm`. Collective. InputError if missing or not HDF5.
   static File open_read(const std::string& path, MPI_Comm comm);
 
@@ -93,8 +97,8 @@ class File {
   bool sealed_ = false;
 };
 
-/// The checksum seal of the files cgd writes (format version 2, docs/schema-run.md "The checksum seal"):
-/// File::create reserves an HDF5 user block of kSealBytes at the start of the file (HDF5 and h5py skip
+/// The checksum seal (checkpoints of version 2, docs/schema-run.md "Seal and validation"): File::create
+/// with Seal::Yes reserves an HDF5 user block of kSealBytes at the start of the file (HDF5 and h5py skip
 /// it); write_atomically fills it, once the file is closed, with one line
 ///   "cgd-seal fnv1a64 <16 hex digits> bytes <n>\n"
 /// -- the FNV-1a 64-bit hash (core/checksum.hpp) and length of every byte after the user block --
@@ -115,8 +119,10 @@ SealState check_seal(const std::string& path, std::string* problem);
 
 /// Write `final_path` atomically: `body` fills a file created at a temporary name in the same
 /// folder; after a collective close rank 0 fsyncs and renames it into place, so a reader (or a
-/// run killed at any moment) never sees a half-written file. Collective.
-void write_atomically(const std::string& final_path, MPI_Comm comm, const std::function<void(File&)>& body);
+/// run killed at any moment) never sees a half-written file; with Seal::Yes the file is sealed before it is
+/// renamed. Collective.
+void write_atomically(const std::string& final_path, MPI_Comm comm, const std::function<void(File&)>& body,
+                      Seal seal = Seal::No);
 
 /// Write `final_path` atomically as a modified copy of `source_path`: the source is copied to a temporary
 /// name, opened read-write for `body`, then moved into place as write_atomically does. Calling rank

@@ -286,10 +286,10 @@ void write_filtered_file(const FilterPlan& plan, const FilterOptions& o, const s
                 << " gets the run's scene text without the common /params\n";
     }
     if (scene_ok) {
-      schema::write_common(f, "filtered", scene);
+      schema::write_common(f, schema::kFiltered, scene);
     } else {
-      f.set_attr("/", "cgd_format", std::string("filtered"));
-      f.set_attr("/", "cgd_format_version", schema::kFormatVersion);
+      f.set_attr("/", "cgd_format", std::string(schema::kFiltered.name));
+      f.set_attr("/", "cgd_format_version", schema::kFiltered.version);
       f.set_attr("/", "code_version", std::string(CGD_VERSION));
       f.set_attr("/", "scene", r0.physics.scene_toml);
     }

@@ -57,7 +57,7 @@ void write_model_file(const std::string& path, const FitResult& R, const std::ve
                       const FitOptions& o, const Scene& scene) {
   const DragModel& M = R.model;
   h5::write_atomically(path, MPI_COMM_SELF, [&](h5::File& f) {
-    schema::write_common(f, "drag_model", scene);
+    schema::write_common(f, schema::kDragModel, scene);
     f.set_attr(
         "/", "model_form",
         std::string("beta_bar/beta_micro = c_corr(alpha) [1 - h(phi)/(1 + a(phi) F^n)], F = l_char_m / Delta, "
@@ -292,7 +292,7 @@ std::string write_grid_table_model(const std::string& path, const std::vector<Fi
   log_a.coefficients.assign(H.size(), -700.0);  // a = exp(-700) ~ 1e-304: 0 for any evaluator of the file
   const double h_max = 0.99;
   h5::write_atomically(path, MPI_COMM_SELF, [&](h5::File& f) {
-    schema::write_common(f, "drag_model", scene);
+    schema::write_common(f, schema::kDragModel, scene);
     f.set_attr("/", "model_form",
                std::string("beta_bar/beta_micro = c_corr(alpha) [1 - H_grid(phi)], H_grid the a-priori filtered drag "
                            "correction of one coarse grid (curves = table): piecewise linear in phi through the table, "

@@ -14,6 +14,7 @@
 
 #include "core/error.hpp"
 #include "core/h5.hpp"
+#include "core/schema/check.hpp"
 
 namespace cgd::fit {
 
@@ -96,26 +97,33 @@ double quantile(std::vector<double> v, double q) {
 ParcelRun read_parcel_run(const std::string& run_dir, double u_t) {
   const std::string path = (std::filesystem::path(run_dir) / "summary.h5").string();
   h5::File f = h5::File::open_read(path, MPI_COMM_SELF);
-  if (!f.has_attr("/", "cgd_format") || f.attr_string("/", "cgd_format") != "coarse_summary")
-    throw InputError(path + ": not a cgd-coarse summary (cgd_format 'coarse_summary' expected)");
+  schema::check_format(f, schema::kCoarseSummary);
   const std::string drag = f.attr_string("/", "drag");
   if (drag != "model" && drag != "model-raw")
     throw InputError(path + ": the run used drag '" + f.attr_string("/", "drag") +
                      "'; the parcel fit needs runs with the grid model (drag = \"model\")");
   // alpha = 1 runs are the same with c_corr on or off (c_corr(1) = 1)
-  const bool primary = std::abs(f.attr_double("/", "parcel_size") - 1.0) < 1e-12;
+  const bool primary = std::abs(schema::finite_attr(f, "/", "parcel_size") - 1.0) < 1e-12;
   if (!primary && (!f.has_attr("/params", "parcel_correction") || f.attr_int("/params", "parcel_correction") != 0))
     throw InputError(path + ": the run applied c_corr; the parcel fit needs runs with fluid.parcel_correction = false");
   if (!f.has_attr("/", "reference_slip_over_ut"))
     throw InputError(path + ": the run has no reference (run cgd-coarse with --reference RESOLVED_RUN)");
   ParcelRun r;
   r.run_dir = run_dir;
-  r.solids_fraction = f.attr_double("/params", "solids_fraction");
-  r.parcel_size = f.attr_double("/", "parcel_size");
-  r.slip_m_s = f.attr_double("/", "slip_over_ut") * u_t;
-  r.slip_se_m_s = f.attr_double("/", "slip_stderr") * u_t;
-  r.reference_m_s = f.attr_double("/", "reference_slip_over_ut") * u_t;
-  r.reference_se_m_s = f.attr_double("/", "reference_slip_stderr") * u_t;
+  // the fit weighs each run by its errors: every number finite, the errors and the solids fraction positive
+  auto positive = [&](const std::string& object, const char* name) {
+    const double v = schema::finite_attr(f, object, name);
+    if (!(v > 0))
+      throw InputError(path + ": attribute '" + name + "' of '" + object + "' is " + std::to_string(v) +
+                       ", expected a positive number");
+    return v;
+  };
+  r.solids_fraction = positive("/params", "solids_fraction");
+  r.parcel_size = positive("/", "parcel_size");
+  r.slip_m_s = schema::finite_attr(f, "/", "slip_over_ut") * u_t;
+  r.slip_se_m_s = positive("/", "slip_stderr") * u_t;
+  r.reference_m_s = schema::finite_attr(f, "/", "reference_slip_over_ut") * u_t;
+  r.reference_se_m_s = positive("/", "reference_slip_stderr") * u_t;
   r.seed = f.has_attr("/params", "seed") ? static_cast<int>(f.attr_int("/params", "seed")) : 1;
   return r;
 }

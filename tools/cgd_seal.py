@@ -1,11 +1,13 @@
 #!/usr/bin/python3
-"""The checksum seal of cgd's files (format version 2; docs/schema-run.md "The checksum seal").
+"""The checksum seal of cgd's checkpoints (checkpoint.h5, format version 2; docs/schema-run.md "Seal and
+validation").
 
-cgd writes every HDF5 file with a 512-byte user block at its start (HDF5 and h5py skip it) holding one
-line, "cgd-seal fnv1a64 <16 hex digits> bytes <n>\\n", zero-padded: the FNV-1a 64-bit hash and the length
-of every byte after the user block (core/h5.hpp). cgd refuses a sealed file whose bytes do not match, and
-a version-2 file without a seal. A tool that edits a cgd file in place with h5py (tools/pipeline_reuse.py)
-seals it again with seal(path) once the file is closed.
+cgd writes a checkpoint with a 512-byte user block at its start (HDF5 and h5py skip it) holding one line,
+"cgd-seal fnv1a64 <16 hex digits> bytes <n>\\n", zero-padded: the FNV-1a 64-bit hash and the length of every
+byte after the user block (core/h5.hpp). A restart refuses a checkpoint whose bytes do not match, and a
+version-2 checkpoint without a seal. No other cgd file is sealed: they are read and validated by content,
+so editing them with h5py needs nothing of this tool. Someone who edits a checkpoint on purpose (and knows
+the restart will then continue from the edited state) seals it again with `cgd_seal.py seal FILE`.
 
     cgd_seal.py check FILE...   exit 0 if every file's seal matches (or it has none), 2 otherwise
     cgd_seal.py seal FILE...    rewrite the seal of files that have cgd's user block

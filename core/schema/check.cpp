@@ -22,24 +22,29 @@ std::string dataset_name(const std::string& d) {
 
 }  // namespace
 
-std::int64_t check_format(const h5::File& f, const char* format, const std::string& what, const std::string& hint) {
+std::int64_t check_format(const h5::File& f, const Format& format) {
   const std::string& path = f.path();
+  const std::string expected = std::string("expected \"") + format.name + "\", a " + format.what + " written by " +
+                               format.written_by;
   if (!f.has_attr("/", "cgd_format"))
-    throw InputError(path + ": not a cgd file (no root attribute 'cgd_format'; expected '" + format + "': " + hint +
-                     ")");
+    throw InputError(path + ": not a cgd file (no root attribute 'cgd_format'; " + expected + ")");
   const std::string given = f.attr_string("/", "cgd_format");
-  if (given != format)
-    throw InputError(path + ": cgd_format = \"" + given + "\": not a " + what + " (" + hint + ")");
+  if (given != format.name)
+    throw InputError(path + ": cgd_format = \"" + given + "\": not a " + format.what + " (" + expected + ")");
+  const std::string versions = format.oldest_version == format.version
+                                   ? "version " + std::to_string(format.version)
+                                   : "versions " + std::to_string(format.oldest_version) + " to " +
+                                         std::to_string(format.version);
   if (!f.has_attr("/", "cgd_format_version"))
-    throw InputError(path + ": " + what + " lacks the root attribute cgd_format_version (expected " +
-                     std::to_string(kOldestFormatVersion) + " to " + std::to_string(kFormatVersion) + ")");
+    throw InputError(path + ": " + format.what + " lacks the root attribute cgd_format_version (expected " + versions +
+                     ")");
   const std::int64_t version = f.attr_int("/", "cgd_format_version");
-  if (version < kOldestFormatVersion || version > kFormatVersion)
-    throw InputError(path + ": cgd_format_version = " + std::to_string(version) + ": this build reads versions " +
-                     std::to_string(kOldestFormatVersion) + " to " + std::to_string(kFormatVersion) +
-                     (version > kFormatVersion ? " (written by a newer cgd: read it with that build)" : ""));
-  if (version >= 2 && !f.sealed())
-    throw InputError(path + ": damaged: a " + what + " of version " + std::to_string(version) +
+  if (version < format.oldest_version || version > format.version)
+    throw InputError(path + ": cgd_format_version = " + std::to_string(version) + ": this build reads " + format.what +
+                     "s of " + versions +
+                     (version > format.version ? " (written by a newer cgd: read it with that build)" : ""));
+  if (format.sealed && version >= 2 && !f.sealed())
+    throw InputError(path + ": damaged: a " + std::string(format.what) + " of version " + std::to_string(version) +
                      " carries a checksum seal in its first 512 bytes, and this one has none (overwritten, or "
                      "rewritten by another tool)");
   return version;

@@ -13,19 +13,38 @@
 
 namespace cgd::schema {
 
-/// The format version this build writes: 2 (every file sealed with its checksum, core/h5.hpp).
-inline constexpr std::int64_t kFormatVersion = 2;
-/// The oldest version this build reads: 1 (the same names; no seal, so damage inside the file's data can
-/// go unnoticed). Version 1 files are read as they always were (docs/schema-run.md "Versions").
-inline constexpr std::int64_t kOldestFormatVersion = 1;
+/// One file format of cgd (docs/schema-*.md): its cgd_format name, the version this build writes, the
+/// oldest version it reads, whether the file carries the checksum seal (core/h5.hpp), and for messages
+/// what it is and who writes it. Every writer stamps a format with write_common (core/output.hpp), every
+/// reader checks it with check_format, from these rows alone.
+struct Format {
+  const char* name;
+  std::int64_t version;
+  std::int64_t oldest_version;
+  bool sealed;
+  const char* what;
+  const char* written_by;
+};
+
+/// Checkpoints are sealed (version 2: the seal's user block) because a restart must not run on damaged
+/// bytes and users have no reason to edit them; every other format is read and validated by its content,
+/// so a file a researcher edited with h5py stays readable (docs/schema-run.md "Seal and validation").
+inline constexpr Format kSnapshot{"snapshot", 1, 1, false, "snapshot", "cgd-generate or cgd-coarse"};
+inline constexpr Format kSeries{"series", 1, 1, false, "series file", "cgd-generate or cgd-coarse"};
+inline constexpr Format kCheckpoint{"checkpoint", 2, 1, true, "checkpoint",
+                                    "the checkpoint.h5 of a run directory, written by cgd-generate or cgd-coarse"};
+inline constexpr Format kFiltered{"filtered", 1, 1, false, "filtered file", "cgd-filter"};
+inline constexpr Format kDragModel{"drag_model", 1, 1, false, "drag model file", "cgd-fit"};
+inline constexpr Format kCoarseSummary{"coarse_summary", 1, 1, false, "coarse summary",
+                                       "cgd-coarse (a coarse run's summary.h5, or --summarise)"};
 
 /// A dimension that may take any extent in an expected shape.
 inline constexpr std::uint64_t kAnyExtent = ~std::uint64_t{0};
 
-/// Checks the root attributes cgd_format (= `format`) and cgd_format_version (kOldestFormatVersion ..
-/// kFormatVersion), and that a file of version 2 or later carries a valid seal. `what` names the kind
-/// ("snapshot", "filtered file"), `hint` says which files are expected. Returns the version.
-std::int64_t check_format(const h5::File& f, const char* format, const std::string& what, const std::string& hint);
+/// Checks the root attributes cgd_format (= format.name) and cgd_format_version (format.oldest_version ..
+/// format.version), and that a sealed format's file of version 2 or later carries a valid seal (open_read
+/// has refused a seal that does not match). Returns the version.
+std::int64_t check_format(const h5::File& f, const Format& format);
 
 /// "(1408, 3)".
 std::string shape_text(const std::vector<std::uint64_t>& dims);

@@ -35,7 +35,8 @@ for item in spec:
         p = f.create_group("params").attrs
         p["solids_fraction"], p["seed"], p["parcel_correction"] = phi, seed, int(alpha == 1)
         a = f.attrs
-        a["cgd_format"], a["drag"] = "coarse_summary", ("model" if alpha == 1 else "model-raw")
+        a["cgd_format"], a["cgd_format_version"] = "coarse_summary", 1
+        a["drag"] = "model" if alpha == 1 else "model-raw"
         a["parcel_size"], a["slip_over_ut"], a["slip_stderr"] = alpha, slip, 0.005
         a["reference_slip_over_ut"], a["reference_slip_stderr"] = 1.0, 0.01
     print(d)

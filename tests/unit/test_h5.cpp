@@ -241,14 +241,15 @@ TEST_F(H5Test, AtomicWriteLeavesOnlyTheCompleteFile) {
   EXPECT_EQ(File::open_read(final_path, MPI_COMM_WORLD).attr_int("/", "step"), 7);
 }
 
-// The checksum seal (h5.hpp): written by write_atomically, checked by open_read before HDF5 parses the
-// file, so an overwritten byte anywhere after the user block, or a file cut short, is an InputError.
+// The checksum seal (h5.hpp, the checkpoints' format): written by write_atomically with Seal::Yes, checked
+// by open_read before HDF5 parses the file, so an overwritten byte anywhere after the user block, or a file
+// cut short, is an InputError.
 TEST_F(H5Test, SealedFileIsRefusedOnceAByteChangesOrItIsCutShort) {
   const std::string final_path = path("sealed.h5");
   cgd::h5::write_atomically(final_path, MPI_COMM_WORLD, [&](File& f) {
     const std::vector<double> x{1, 2, 3, 4};
     f.write_replicated("/data", x, {4});
-  });
+  }, cgd::h5::Seal::Yes);
   EXPECT_TRUE(File::open_read(final_path, MPI_COMM_WORLD).sealed());
   std::string problem;
   EXPECT_EQ(cgd::h5::check_seal(final_path, &problem), cgd::h5::SealState::Valid) << problem;
@@ -273,9 +274,11 @@ TEST_F(H5Test, SealedFileIsRefusedOnceAByteChangesOrItIsCutShort) {
       EXPECT_NE(msg.find(expected), std::string::npos) << msg;
     }
   }
-  // a file without the user block (written by another tool) is read as before, unsealed
-  File::create(path("plain.h5"), MPI_COMM_WORLD).close();
+  // a file without the user block (every format but the checkpoint, or one written by another tool) is
+  // read as before, unsealed
+  cgd::h5::write_atomically(path("plain.h5"), MPI_COMM_WORLD, [&](File&) {});
   EXPECT_FALSE(File::open_read(path("plain.h5"), MPI_COMM_WORLD).sealed());
+  EXPECT_EQ(cgd::h5::check_seal(path("plain.h5"), &problem), cgd::h5::SealState::None);
 }
 
 TEST_F(H5Test, AtomicWriteWithAFailingBodyLeavesNeitherFinalNorTmp) {
