@@ -184,18 +184,12 @@ def check_all(tmp):
         print(text)
         print("FAIL: could not fit the model")
         return 1
+    sys.path.insert(0, os.path.join(SRC, "tests", "fit"))
+    import synthetic_summary
     summaries = []
     for alpha, slip in ((1, 0.950), (2, 0.952), (2, 0.948), (3, 0.949), (4, 0.951)):
         d = os.path.join(tmp, "coarse", f"a{alpha}_{len(summaries)}")
-        os.makedirs(d)
-        with h5py.File(os.path.join(d, "summary.h5"), "w") as f:  # as tests/e2e/parcel_fit.sh writes them
-            p = f.create_group("params").attrs
-            p["solids_fraction"], p["seed"], p["parcel_correction"] = 0.05, len(summaries), int(alpha == 1)
-            a = f.attrs
-            a["cgd_format"], a["cgd_format_version"] = "coarse_summary", 1
-            a["drag"] = "model" if alpha == 1 else "model-raw"
-            a["parcel_size"], a["slip_over_ut"], a["slip_stderr"] = float(alpha), slip, 0.005
-            a["reference_slip_over_ut"], a["reference_slip_stderr"] = 1.0, 0.01
+        synthetic_summary.write(d, 0.05, alpha, len(summaries), slip)  # as tests/e2e/parcel_fit.sh writes them
         summaries.append(d)
     last_snapshot = sorted(os.listdir(os.path.join(run_dir, "snapshots")))[-1]
     restart = [f"{BIN}/cgd-generate", scene, *short[:2], "--set", "run.end_time=0.04", *short[4:], "--restart"]
