@@ -155,10 +155,30 @@ FilteredDragSetup filtered_drag_setup(const Scene& scene, const Vec3& cell_spaci
   return setup;
 }
 
+const CalibrationOperatorNames& names_of(CalibrationOperator op) {
+  for (const CalibrationOperatorNames& n : kCalibrationOperators)
+    if (n.op == op) return n;
+  return kCalibrationOperators[0];  // unreachable: every enumerator has its row
+}
+
+std::optional<CalibrationOperator> parse_calibration_operator(const std::string& text,
+                                                              const char* CalibrationOperatorNames::*place) {
+  for (const CalibrationOperatorNames& n : kCalibrationOperators)
+    if (text == n.*place) return n.op;
+  return std::nullopt;
+}
+
+std::string calibration_operator_choices(const char* CalibrationOperatorNames::*place) {
+  std::string out;
+  for (const CalibrationOperatorNames& n : kCalibrationOperators)
+    out += (out.empty() ? "\"" : " or \"") + std::string(n.*place) + "\"";
+  return out;
+}
+
 std::vector<std::string> model_calibration_warnings(const DragModel& m, double delta_m) {
   std::vector<std::string> out;
   const double d = m.diameter_m > 0 ? m.diameter_m : 1.0;
-  if (m.calibration_operator == "box") {
+  if (m.calibration_operator == CalibrationOperator::Box) {
     out.push_back(m.path + " was calibrated with the particle-centred box filter (operator = \"box\"), but this run "
                   "sees phi, u and grad p through its grid's TSC deposit and interpolation, which filters like a box of "
                   "1.8-2.45 cells (docs/filter.md); its Delta = " + number(delta_m / d) + " d_p means a different filter than in the "
@@ -258,9 +278,14 @@ DragModel load_drag_model(const std::string& path) {
   if (!(m.log_a_min <= m.log_a_max))
     throw InputError(path + ": log_a_min = " + number(m.log_a_min) + " > log_a_max = " + number(m.log_a_max));
   // calibration (absent in files written before it: the box filter)
-  if (f.has_attr("/", "operator")) m.calibration_operator = f.attr_string("/", "operator");
-  if (m.calibration_operator != "box" && m.calibration_operator != "tsc-grid")
-    throw InputError(path + ": operator = \"" + m.calibration_operator + "\": allowed \"box\" or \"tsc-grid\"");
+  if (f.has_attr("/", "operator")) {
+    const std::string text = f.attr_string("/", "operator");
+    const auto op = parse_calibration_operator(text, &CalibrationOperatorNames::model_file);
+    if (!op)
+      throw InputError(path + ": attribute 'operator' of '/' is \"" + text + "\", expected " +
+                       calibration_operator_choices(&CalibrationOperatorNames::model_file));
+    m.calibration_operator = *op;
+  }
   if (f.has_attr("/", "calibrated_delta_m")) m.calibrated_delta_m = schema::finite_attrs(f, "/", "calibrated_delta_m");
   if (f.has_attr("/", "curves")) {
     const std::string curves = f.attr_string("/", "curves");

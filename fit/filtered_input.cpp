@@ -142,9 +142,8 @@ FilteredFile read_filtered_file(const std::string& path) {
   return out;
 }
 
-std::vector<FilteredFile> select_operator(const std::vector<FilteredFile>& files, const std::string& op) {
-  if (op == "box") return files;
-  if (op != "grid") throw InputError("cgd-fit: --operator " + op + ": allowed \"box\" or \"grid\"");
+std::vector<FilteredFile> select_operator(const std::vector<FilteredFile>& files, CalibrationOperator op) {
+  if (op == CalibrationOperator::Box) return files;
   std::vector<FilteredFile> out = files;
   for (FilteredFile& f : out) {
     if (f.grids.empty())
