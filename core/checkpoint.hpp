@@ -89,7 +89,7 @@ class Reader {
   /// file (docs/schema-run.md "What the readers check"): the format and version, every attribute's type,
   /// finite times, per-rank counts that match the rank count, every particle array of N = the sum of
   /// rank_particle_counts rows (and 3 columns where it is a vector), M = the sum of rank_contact_counts
-  /// contact records matching the particles' contact_count, ids in [0, N), finite positions, velocities,
+  /// contact records matching the particles' contact_count, ids and partners >= 0, finite positions, velocities,
   /// springs and fluid fields, the eight fluid fields of one length. InputError naming the file, the
   /// dataset or attribute, what was found and what was expected; every rank throws the same. Collective.
   Reader(const std::string& path, MPI_Comm comm);
