@@ -72,6 +72,18 @@ std::int64_t sum(const std::vector<std::int64_t>& v) {
 
 }  // namespace
 
+Header read_header(const std::string& path, MPI_Comm comm) {
+  const h5::File f = h5::File::open_read(path, comm);
+  schema::check_format(f, schema::kCheckpoint);
+  Header h;
+  h.scene_toml = f.attr_string("/", "scene");
+  h.scene_name = f.attr_string("/params", "scene_name");
+  h.ranks = f.attr_int("/", "ranks");
+  if (h.ranks < 1)
+    throw InputError(path + ": attribute 'ranks' of '/' is " + std::to_string(h.ranks) + ", expected >= 1");
+  return h;
+}
+
 Reader::Reader(const std::string& path, MPI_Comm comm) : file_(h5::File::open_read(path, comm)) {
   // Everything below reads metadata every rank sees alike, so every rank throws the same InputError;
   // the values (scan_values) are checked in slices, with one collective verdict.

@@ -73,6 +73,15 @@ struct FluidRows {
 void write(const std::string& path, MPI_Comm comm, const Scene& scene, const RunState& state,
            const ParticleRows& particles, const FluidRows* fluid);
 
+/// What a checkpoint says about its run without its state: the effective scene it was written with (TOML
+/// text and name) and the rank count that wrote it. Opening checks the seal and the format (check_format),
+/// so a damaged checkpoint is refused before a restart compares scenes. Collective.
+struct Header {
+  std::string scene_toml, scene_name;
+  std::int64_t ranks = 1;
+};
+Header read_header(const std::string& path, MPI_Comm comm);
+
 /// Particle rows read back (owning vectors, same meaning as ParticleRows).
 struct ParticleData {
   std::vector<std::int64_t> id;
