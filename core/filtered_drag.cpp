@@ -299,6 +299,26 @@ DragModel load_drag_model(const std::string& path) {
                        std::to_string(m.h_spline.order));
     if (f.has_attr("/", "table_cells_across")) m.table_cells_across = f.attr_int("/", "table_cells_across");
   }
+  // provenance and bands (cgd-export)
+  if (f.has_attr("/", "code_version")) m.code_version = f.attr_string("/", "code_version");
+  if (f.has_attr("/", "created")) m.created = f.attr_string("/", "created");
+  if (f.has_attr("/", "calibrated_cells_across")) m.calibrated_cells_across = f.attr_ints("/", "calibrated_cells_across");
+  if (f.exists("/sources") && f.has_attr("/sources", "files")) {
+    m.source_files = f.attr_strings("/sources", "files");
+    if (f.has_attr("/sources", "checksums")) m.source_checksums = f.attr_strings("/sources", "checksums");
+  }
+  if (f.exists("/provenance"))
+    for (const char* key : {"made_by", "resolved_runs", "valid_for", "validation"})
+      if (f.has_attr("/provenance", key)) m.provenance.emplace_back(key, f.attr_string("/provenance", key));
+  if (f.exists("/bands/phi") && f.exists("/bands/F") && f.exists("/bands/H_low") && f.exists("/bands/H_high")) {
+    using schema::Finite;
+    DragModel::Bands& b = m.bands;
+    b.phi = schema::read_doubles(f, "/bands/phi", {schema::kAnyExtent}, Finite::Everywhere);
+    b.F = schema::read_doubles(f, "/bands/F", {schema::kAnyExtent}, Finite::Everywhere);
+    const std::string shape = "(len(/bands/F), len(/bands/phi))";
+    b.H_low = schema::read_doubles(f, "/bands/H_low", {b.F.size(), b.phi.size()}, Finite::Not, shape);
+    b.H_high = schema::read_doubles(f, "/bands/H_high", {b.F.size(), b.phi.size()}, Finite::Not, shape);
+  }
   f.close();
   m.checksum = file_checksum_fnv1a(path);
   return m;

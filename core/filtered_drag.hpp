@@ -124,6 +124,15 @@ struct DragModel : PhysicalSystem {
   // no phi_crit rule, and a = 0: the correction is 1 - H_grid(phi) at any Delta (meant for grid N's Delta).
   bool table = false;
   std::int64_t table_cells_across = 0;
+
+  // Read for cgd-export, not used by the law: where the file came from and the 95 % bands of H.
+  std::string code_version, created;
+  std::vector<std::int64_t> calibrated_cells_across;
+  std::vector<std::string> source_files, source_checksums;         // /sources: the filtered files fitted
+  std::vector<std::pair<std::string, std::string>> provenance;     // /provenance: made_by, resolved_runs, ...
+  struct Bands {                                                    // /bands (empty: table models, older files)
+    std::vector<double> phi, F, H_low, H_high;                      // H_low, H_high of shape (len(F), len(phi))
+  } bands;
 };
 
 /// Warnings for a run with filter width `delta_m` (the cube root of its cell volume) using `model`:
