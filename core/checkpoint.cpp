@@ -167,7 +167,7 @@ void Reader::scan_values(MPI_Comm comm, std::int64_t n, std::int64_t m) const {
     for (const char* d : {"/particles/position", "/particles/velocity", "/particles/angular_velocity"}) {
       if (!file_.exists(d)) continue;
       const std::vector<double> v = file_.read_rows_double(d, p0, p1 - p0);
-      schema::require_finite(path, d, v.data(), v.size(), 3);
+      schema::require_finite(path, d, v.data(), v.size(), 3, static_cast<std::size_t>(p0));
     }
     const std::vector<std::int64_t> id = file_.read_rows_int("/particles/id", p0, p1 - p0);
     for (std::size_t i = 0; i < id.size(); ++i)
@@ -184,13 +184,13 @@ void Reader::scan_values(MPI_Comm comm, std::int64_t n, std::int64_t m) const {
       if (q < 0)
         throw InputError(path + ": dataset '/contacts/partner' holds " + std::to_string(q) + ", expected an id >= 0");
     const std::vector<double> spring = file_.read_rows_double("/contacts/spring", c0, c1 - c0);
-    schema::require_finite(path, "/contacts/spring", spring.data(), spring.size(), 3);
+    schema::require_finite(path, "/contacts/spring", spring.data(), spring.size(), 3, static_cast<std::size_t>(c0));
     if (fluid_cells_ > 0) {
       const auto [f0, f1] = slice(fluid_cells_);
       for (const char* name : kFluidFieldNames) {
         const std::string d = std::string("/fluid/") + name;
         const std::vector<double> v = file_.read_rows_double(d, f0, f1 - f0);
-        schema::require_finite(path, d, v.data(), v.size());
+        schema::require_finite(path, d, v.data(), v.size(), 1, static_cast<std::size_t>(f0));
       }
     }
   } catch (const std::exception& e) {

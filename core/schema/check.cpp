@@ -78,8 +78,24 @@ std::vector<double> read_doubles(const h5::File& f, const std::string& dataset,
                                  const std::vector<std::uint64_t>& expected, Finite finite, const std::string& why) {
   const auto dims = require_shape(f, dataset, expected, why);
   std::vector<double> v = f.read_double(dataset_name(dataset));
-  if (finite == Finite::Everywhere)
-    require_finite(f.path(), dataset_name(dataset), v.data(), v.size(), dims.size() > 1 ? v.size() / std::max<std::uint64_t>(dims[0], 1) : 1);
+  if (finite != Finite::Everywhere) return v;
+  if (dims.size() <= 2) {
+    require_finite(f.path(), dataset_name(dataset), v.data(), v.size(), dims.size() == 2 ? dims[1] : 1);
+    return v;
+  }
+  for (std::size_t i = 0; i < v.size(); ++i)
+    if (!std::isfinite(v[i])) {  // a field (n_z, n_y, n_x[, 3]): its index, slowest first
+      std::vector<std::uint64_t> index(dims.size());
+      std::uint64_t rest = i;
+      for (std::size_t k = dims.size(); k-- > 0;) {
+        index[k] = rest % std::max<std::uint64_t>(dims[k], 1);
+        rest /= std::max<std::uint64_t>(dims[k], 1);
+      }
+      std::string at = shape_text(index);
+      at = "[" + at.substr(1, at.size() - 2) + "]";
+      throw InputError(f.path() + ": dataset '" + dataset_name(dataset) + "' holds " + number(v[i]) + " at " + at +
+                       ", expected finite values");
+    }
   return v;
 }
 
@@ -93,12 +109,12 @@ std::vector<std::int64_t> read_ints(const h5::File& f, const std::string& datase
 }
 
 void require_finite(const std::string& path, const std::string& dataset, const double* values, std::size_t n,
-                    std::size_t row_width) {
+                    std::size_t row_width, std::size_t first_row) {
   for (std::size_t i = 0; i < n; ++i)
     if (!std::isfinite(values[i])) {
       const std::size_t w = row_width ? row_width : 1;
       throw InputError(path + ": dataset '" + dataset + "' holds " + number(values[i]) + " at row " +
-                       std::to_string(i / w) + (w > 1 ? " column " + std::to_string(i % w) : std::string()) +
+                       std::to_string(first_row + i / w) + (w > 1 ? " column " + std::to_string(i % w) : std::string()) +
                        ", expected finite values");
     }
 }

@@ -66,10 +66,10 @@ std::vector<double> read_doubles(const h5::File& f, const std::string& dataset,
 std::vector<std::int64_t> read_ints(const h5::File& f, const std::string& dataset,
                                     const std::vector<std::uint64_t>& expected, const std::string& why = "");
 
-/// InputError naming `dataset` of `path` and the first non-finite value (its flat index and row of
-/// `row_width` values), unless every value is finite.
+/// InputError naming `dataset` of `path` and the first non-finite value (its row of `row_width` values,
+/// counted from `first_row` when `values` is a slice of the dataset), unless every value is finite.
 void require_finite(const std::string& path, const std::string& dataset, const double* values, std::size_t n,
-                    std::size_t row_width = 1);
+                    std::size_t row_width = 1, std::size_t first_row = 0);
 /// The same for the rows whose count[i] > 0 (per-bin arrays: values.size() == count.size()).
 void require_finite_where_counted(const std::string& path, const std::string& dataset,
                                   const std::vector<double>& values, const std::vector<std::int64_t>& count);
