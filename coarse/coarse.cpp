@@ -7,6 +7,7 @@
 
 #include "core/error.hpp"
 #include "core/h5.hpp"
+#include "core/schema/coarse_summary.hpp"
 #include "core/output.hpp"
 
 namespace cgd::coarse {
@@ -123,36 +124,32 @@ std::string describe(const Comparison& c) {
 
 void write_summary(const std::string& path, const Scene& scene, const SlipSummary& s,
                    const std::optional<Comparison>& cmp, const std::string& drag) {
-  h5::write_atomically(path, MPI_COMM_SELF, [&](h5::File& f) {
-    schema::write_common(f, "coarse_summary", scene);
-    const std::string g = "/";
-    f.set_attr(g, "drag", drag);
-    f.set_attr(g, "parcel_size", scene.particles.parcel_size);
-    f.set_attr(g, "cell_over_dp", std::cbrt(scene.domain.size_m[0] * scene.domain.size_m[1] * scene.domain.size_m[2] /
-                                            (1.0 * scene.derived.cells[0] * scene.derived.cells[1] * scene.derived.cells[2])) /
-                                      scene.particles.diameter_m);
-    f.set_attr(g, "slip_over_ut", s.slip.mean);
-    f.set_attr(g, "slip_stderr", s.slip.standard_error);
-    f.set_attr(g, "window_start_s", s.slip.start_s);
-    f.set_attr(g, "window_end_s", s.slip.end_s);
-    f.set_attr(g, "batches", static_cast<std::int64_t>(s.slip.batches));
-    f.set_attr(g, "drift_over_ut", s.drift);
-    f.set_attr(g, "drift_stderr", s.drift_stderr);
-    f.set_attr(g, "stationary", static_cast<std::int64_t>(s.stationary()));
-    f.set_attr(g, "simulated_s", s.simulated_s);
-    f.set_attr(g, "wall_s", s.wall_s);
-    f.set_attr(g, "ranks", static_cast<std::int64_t>(s.ranks));
-    f.set_attr(g, "core_seconds_per_simulated_second", s.core_seconds_per_simulated_second);
-    if (cmp) {
-      f.set_attr(g, "reference", cmp->reference.run_dir);
-      f.set_attr(g, "reference_slip_over_ut", cmp->reference.slip.mean);
-      f.set_attr(g, "reference_slip_stderr", cmp->reference.slip.standard_error);
-      f.set_attr(g, "reference_window_start_s", cmp->reference.slip.start_s);
-      f.set_attr(g, "reference_window_end_s", cmp->reference.slip.end_s);
-      f.set_attr(g, "relative_error", cmp->relative_error);
-      f.set_attr(g, "relative_error_stderr", cmp->relative_error_stderr);
-    }
-  });
+  schema::CoarseSummary out;
+  out.drag = drag;
+  out.parcel_size = scene.particles.parcel_size;
+  const auto& box = scene.domain.size_m;
+  const auto& cells = scene.derived.cells;
+  out.cell_over_dp = std::cbrt(box[0] * box[1] * box[2] / (1.0 * cells[0] * cells[1] * cells[2])) /
+                     scene.particles.diameter_m;
+  out.slip_over_ut = s.slip.mean;
+  out.slip_stderr = s.slip.standard_error;
+  out.window_start_s = s.slip.start_s;
+  out.window_end_s = s.slip.end_s;
+  out.batches = static_cast<std::int64_t>(s.slip.batches);
+  out.drift_over_ut = s.drift;
+  out.drift_stderr = s.drift_stderr;
+  out.stationary = s.stationary();
+  out.simulated_s = s.simulated_s;
+  out.wall_s = s.wall_s;
+  out.ranks = s.ranks;
+  out.core_seconds_per_simulated_second = s.core_seconds_per_simulated_second;
+  if (cmp) {
+    const WindowAverage& ref = cmp->reference.slip;
+    out.reference = schema::CoarseSummary::Reference{cmp->reference.run_dir, ref.mean,  ref.standard_error,
+                                                     ref.start_s,            ref.end_s, cmp->relative_error,
+                                                     cmp->relative_error_stderr};
+  }
+  schema::write_coarse_summary(path, scene, out);
 }
 
 }  // namespace cgd::coarse

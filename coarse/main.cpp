@@ -10,7 +10,7 @@
 #include "coarse/coarse.hpp"
 #include "core/cli.hpp"
 #include "core/error.hpp"
-#include "core/h5.hpp"
+#include "core/checkpoint.hpp"
 #include "core/scene.hpp"
 #include "sim/run.hpp"
 
@@ -45,10 +45,8 @@ int summarise_main(int argc, char** argv) {
   if (ranks <= 0) {
     ranks = 1;
     const std::filesystem::path checkpoint = dir / "checkpoint.h5";
-    if (std::filesystem::exists(checkpoint)) {
-      cgd::h5::File c = cgd::h5::File::open_read(checkpoint.string(), MPI_COMM_SELF);
-      if (c.has_attr("/", "ranks")) ranks = static_cast<int>(c.attr_int("/", "ranks"));
-    }
+    if (std::filesystem::exists(checkpoint))
+      ranks = static_cast<int>(cgd::checkpoint::read_header(checkpoint.string(), MPI_COMM_SELF).ranks);
   }
   const double start = from_tref >= 0 ? from_tref * scene.derived.t_ref_s : scene.run.sampling_start_s;
   const auto s = cgd::coarse::summarise_run(run_dir, scene.derived.u_t_m_s, start, ranks, batches);

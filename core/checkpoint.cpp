@@ -1,7 +1,9 @@
 // checkpoint.h5 (docs/schema-run.md, "Checkpoint"): writing and reading a run's restart state.
 #include "core/checkpoint.hpp"
 
+#include "core/error.hpp"
 #include "core/output.hpp"
+#include "core/schema/check.hpp"
 
 namespace cgd::checkpoint {
 
@@ -22,7 +24,7 @@ void write(const std::string& path, MPI_Comm comm, const Scene& scene, const Run
     frame_counts.push_back(f.particle_count);
   }
   h5::write_atomically(path, comm, [&](h5::File& file) {
-    schema::write_common(file, "checkpoint", scene);
+    schema::write_common(file, schema::kCheckpoint, scene);
     file.set_attr("/", "step", state.step);
     file.set_attr("/", "time", state.time_s);
     file.set_attr("/", "displacement_bound", state.displacement_bound_m);
@@ -56,28 +58,150 @@ void write(const std::string& path, MPI_Comm comm, const Scene& scene, const Run
       for (std::size_t k = 0; k < kFluidFieldNames.size(); ++k)
         file.write_rows(std::string("/fluid/") + kFluidFieldNames[k], fluid->fields[k], fluid->cells, 1);
     }
-  });
+  }, h5::Seal::Yes);  // a restart must never run on damaged bytes (schema::kCheckpoint)
+}
+
+namespace {
+
+
+std::int64_t sum(const std::vector<std::int64_t>& v) {
+  std::int64_t s = 0;
+  for (auto x : v) s += x;
+  return s;
+}
+
+}  // namespace
+
+Header read_header(const std::string& path, MPI_Comm comm) {
+  const h5::File f = h5::File::open_read(path, comm);
+  schema::check_format(f, schema::kCheckpoint);
+  Header h;
+  h.scene_toml = f.attr_string("/", "scene");
+  h.scene_name = f.attr_string("/params", "scene_name");
+  h.ranks = f.attr_int("/", "ranks");
+  if (h.ranks < 1)
+    throw InputError(path + ": attribute 'ranks' of '/' is " + std::to_string(h.ranks) + ", expected >= 1");
+  return h;
 }
 
 Reader::Reader(const std::string& path, MPI_Comm comm) : file_(h5::File::open_read(path, comm)) {
+  // Everything below reads metadata every rank sees alike, so every rank throws the same InputError;
+  // the values (scan_values) are checked in slices, with one collective verdict.
+  const h5::File& f = file_;
+  schema::check_format(f, schema::kCheckpoint);
+  auto nonnegative = [&](const char* name, std::int64_t v) {
+    if (v < 0)
+      throw InputError(path + ": attribute '" + name + "' of '/' is " + std::to_string(v) + ", expected >= 0");
+    return v;
+  };
   RunState& s = state_;
-  s.step = file_.attr_int("/", "step");
-  s.time_s = file_.attr_double("/", "time");
-  s.displacement_bound_m = file_.attr_double("/", "displacement_bound");
-  s.rebuild_due = file_.attr_int("/", "rebuild_due") != 0;
-  if (file_.has_attr("/", "skin")) s.skin_m = file_.attr_double("/", "skin");  // older checkpoints: none
-  s.last_sort_step = file_.attr_int("/", "last_sort_step");
-  s.neighbor_rebuilds = file_.attr_int("/", "neighbor_rebuilds");
-  s.wall_seconds = file_.attr_double("/", "wall_seconds");
-  s.phase_seconds = file_.attr_doubles("/", "phase_seconds");
-  const auto steps = file_.attr_ints("/", "frame_steps");
-  const auto times = file_.attr_doubles("/", "frame_times");
-  const auto counts = file_.attr_ints("/", "frame_counts");
+  s.step = nonnegative("step", f.attr_int("/", "step"));
+  s.time_s = schema::finite_attr(f, "/", "time");
+  s.displacement_bound_m = schema::finite_attr(f, "/", "displacement_bound");
+  s.rebuild_due = f.attr_int("/", "rebuild_due") != 0;
+  if (f.has_attr("/", "skin")) s.skin_m = schema::finite_attr(f, "/", "skin");  // version 1's first files: none
+  s.last_sort_step = nonnegative("last_sort_step", f.attr_int("/", "last_sort_step"));
+  s.neighbor_rebuilds = nonnegative("neighbor_rebuilds", f.attr_int("/", "neighbor_rebuilds"));
+  s.wall_seconds = schema::finite_attr(f, "/", "wall_seconds");
+  s.phase_seconds = schema::finite_attrs(f, "/", "phase_seconds");
+  const auto steps = f.attr_ints("/", "frame_steps");
+  const auto times = schema::finite_attrs(f, "/", "frame_times", steps.size());
+  const auto counts = f.attr_ints("/", "frame_counts");
+  if (counts.size() != steps.size())
+    throw InputError(path + ": attribute 'frame_counts' of '/' holds " + std::to_string(counts.size()) +
+                     " values, expected " + std::to_string(steps.size()) + " (one per frame_steps)");
   for (std::size_t k = 0; k < steps.size(); ++k) s.frames.push_back({steps[k], times[k], counts[k]});
-  s.placement_method = file_.attr_string("/", "placement_method");
-  ranks_ = file_.attr_int("/", "ranks");
-  particle_counts_ = file_.attr_ints("/", "rank_particle_counts");
-  contact_counts_ = file_.attr_ints("/", "rank_contact_counts");
+  s.placement_method = f.attr_string("/", "placement_method");
+  ranks_ = f.attr_int("/", "ranks");
+  if (ranks_ < 1) throw InputError(path + ": attribute 'ranks' of '/' is " + std::to_string(ranks_) + ", expected >= 1");
+  particle_counts_ = f.attr_ints("/", "rank_particle_counts");
+  contact_counts_ = f.attr_ints("/", "rank_contact_counts");
+  for (const auto* list : {&particle_counts_, &contact_counts_}) {
+    const char* name = list == &particle_counts_ ? "rank_particle_counts" : "rank_contact_counts";
+    if (static_cast<std::int64_t>(list->size()) != ranks_)
+      throw InputError(path + ": attribute '" + name + "' of '/' holds " + std::to_string(list->size()) +
+                       " values, expected ranks = " + std::to_string(ranks_));
+    for (auto c : *list)
+      if (c < 0) throw InputError(path + ": attribute '" + name + "' of '/' holds " + std::to_string(c) + ", expected >= 0");
+  }
+  const auto n = static_cast<std::uint64_t>(sum(particle_counts_));
+  const auto m = static_cast<std::uint64_t>(sum(contact_counts_));
+  const std::string nwhy = "N = " + std::to_string(n) + " particles, the sum of rank_particle_counts";
+  const std::string mwhy = "M = " + std::to_string(m) + " contact records, the sum of rank_contact_counts";
+  schema::require_shape(f, "/particles/id", {n}, nwhy);
+  schema::require_shape(f, "/particles/position", {n, 3}, nwhy);
+  schema::require_shape(f, "/particles/velocity", {n, 3}, nwhy);
+  if (f.exists("/particles/angular_velocity")) schema::require_shape(f, "/particles/angular_velocity", {n, 3}, nwhy);
+  schema::require_shape(f, "/particles/contact_count", {n}, nwhy);
+  schema::require_shape(f, "/contacts/partner", {m}, mwhy);
+  schema::require_shape(f, "/contacts/spring", {m, 3}, mwhy);
+  for (const char* d : {"/particles/id", "/particles/contact_count", "/contacts/partner"})
+    if (!f.is_integer(d))
+      throw InputError(path + ": dataset '" + std::string(d) + "' holds floating-point values, expected integers (int64)");
+  if (f.exists("/fluid")) {
+    const double dt = schema::finite_attr(f, "/fluid", "dt_previous");
+    if (dt < 0) throw InputError(path + ": attribute 'dt_previous' of '/fluid' is negative, expected >= 0");
+    nonnegative("steps of /fluid", f.attr_int("/fluid", "steps"));
+    const std::string first = std::string("/fluid/") + kFluidFieldNames[0];
+    const auto dims = schema::require_shape(f, first, {schema::kAnyExtent});
+    fluid_cells_ = static_cast<std::int64_t>(dims[0]);
+    for (const char* name : kFluidFieldNames)
+      schema::require_shape(f, std::string("/fluid/") + name, {dims[0]},
+                            std::to_string(dims[0]) + " cells, as " + first);
+  }
+  scan_values(comm, static_cast<std::int64_t>(n), static_cast<std::int64_t>(m));
+}
+
+void Reader::scan_values(MPI_Comm comm, std::int64_t n, std::int64_t m) const {
+  int rank = 0, ranks = 1;
+  MPI_Comm_rank(comm, &rank);
+  MPI_Comm_size(comm, &ranks);
+  const std::string& path = file_.path();
+  auto slice = [&](std::int64_t total) {
+    return std::pair<std::int64_t, std::int64_t>{total * rank / ranks, total * (rank + 1) / ranks};
+  };
+  std::string error;
+  std::int64_t contacts = 0;
+  try {
+    const auto [p0, p1] = slice(n);
+    for (const char* d : {"/particles/position", "/particles/velocity", "/particles/angular_velocity"}) {
+      if (!file_.exists(d)) continue;
+      const std::vector<double> v = file_.read_rows_double(d, p0, p1 - p0);
+      schema::require_finite(path, d, v.data(), v.size(), 3, static_cast<std::size_t>(p0));
+    }
+    const std::vector<std::int64_t> id = file_.read_rows_int("/particles/id", p0, p1 - p0);
+    for (std::size_t i = 0; i < id.size(); ++i)
+      if (id[i] < 0)
+        throw InputError(path + ": dataset '/particles/id' holds " + std::to_string(id[i]) + " at row " +
+                         std::to_string(p0 + static_cast<std::int64_t>(i)) + ", expected an id >= 0");
+    for (std::int64_t c : file_.read_rows_int("/particles/contact_count", p0, p1 - p0)) {
+      if (c < 0)
+        throw InputError(path + ": dataset '/particles/contact_count' holds " + std::to_string(c) + ", expected >= 0");
+      contacts += c;
+    }
+    const auto [c0, c1] = slice(m);
+    for (std::int64_t q : file_.read_rows_int("/contacts/partner", c0, c1 - c0))
+      if (q < 0)
+        throw InputError(path + ": dataset '/contacts/partner' holds " + std::to_string(q) + ", expected an id >= 0");
+    const std::vector<double> spring = file_.read_rows_double("/contacts/spring", c0, c1 - c0);
+    schema::require_finite(path, "/contacts/spring", spring.data(), spring.size(), 3, static_cast<std::size_t>(c0));
+    if (fluid_cells_ > 0) {
+      const auto [f0, f1] = slice(fluid_cells_);
+      for (const char* name : kFluidFieldNames) {
+        const std::string d = std::string("/fluid/") + name;
+        const std::vector<double> v = file_.read_rows_double(d, f0, f1 - f0);
+        schema::require_finite(path, d, v.data(), v.size(), 1, static_cast<std::size_t>(f0));
+      }
+    }
+  } catch (const std::exception& e) {
+    error = e.what();
+  }
+  schema::throw_if_any(comm, error);
+  std::int64_t total = 0;
+  MPI_Allreduce(&contacts, &total, 1, MPI_INT64_T, MPI_SUM, comm);
+  if (total != m)
+    throw InputError(path + ": dataset '/particles/contact_count' sums to " + std::to_string(total) +
+                     ", expected M = " + std::to_string(m) + " (the sum of rank_contact_counts)");
 }
 
 bool Reader::has_angular_velocity() const {

@@ -73,6 +73,15 @@ struct FluidRows {
 void write(const std::string& path, MPI_Comm comm, const Scene& scene, const RunState& state,
            const ParticleRows& particles, const FluidRows* fluid);
 
+/// What a checkpoint says about its run without its state: the effective scene it was written with (TOML
+/// text and name) and the rank count that wrote it. Opening checks the seal and the format (check_format),
+/// so a damaged checkpoint is refused before a restart compares scenes. Collective.
+struct Header {
+  std::string scene_toml, scene_name;
+  std::int64_t ranks = 1;
+};
+Header read_header(const std::string& path, MPI_Comm comm);
+
 /// Particle rows read back (owning vectors, same meaning as ParticleRows).
 struct ParticleData {
   std::vector<std::int64_t> id;
@@ -85,9 +94,16 @@ struct ParticleData {
 /// An open checkpoint, for reading (any rank count).
 class Reader {
  public:
-  /// Opens `path` and reads the run state. Collective.
+  /// Opens `path` (File::open_read checks its checksum seal first), reads the run state and validates the
+  /// file (docs/schema-run.md "What the readers check"): the format and version, every attribute's type,
+  /// finite times, per-rank counts that match the rank count, every particle array of N = the sum of
+  /// rank_particle_counts rows (and 3 columns where it is a vector), M = the sum of rank_contact_counts
+  /// contact records matching the particles' contact_count, ids and partners >= 0, finite positions, velocities,
+  /// springs and fluid fields, the eight fluid fields of one length. InputError naming the file, the
+  /// dataset or attribute, what was found and what was expected; every rank throws the same. Collective.
   Reader(const std::string& path, MPI_Comm comm);
   const RunState& state() const { return state_; }
+  const std::string& path() const { return file_.path(); }
   /// Rank count of the run that wrote it, and its per-rank particle and contact-record counts.
   std::int64_t ranks() const { return ranks_; }
   const std::vector<std::int64_t>& rank_particle_counts() const { return particle_counts_; }
@@ -97,6 +113,8 @@ class Reader {
   ParticleData particles(std::int64_t first, std::int64_t count, std::int64_t contact_first,
                          std::int64_t contact_count, bool rotation) const;
   bool has_fluid() const;
+  /// Cells of each fluid field (0 without /fluid).
+  std::int64_t fluid_cells() const { return fluid_cells_; }
   double fluid_dt_previous_s() const;
   std::int64_t fluid_steps() const;
   /// Cells [first, first + count) of kFluidFieldNames[field] in the global (y, z, x) order, into `out`.
@@ -108,6 +126,8 @@ class Reader {
   RunState state_;
   std::int64_t ranks_ = 1;
   std::vector<std::int64_t> particle_counts_, contact_counts_;
+  std::int64_t fluid_cells_ = 0;
+  void scan_values(MPI_Comm comm, std::int64_t n, std::int64_t m) const;
 };
 
 }  // namespace cgd::checkpoint

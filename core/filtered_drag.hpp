@@ -22,6 +22,7 @@
 #include <cmath>
 #include <cstdint>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -31,6 +32,29 @@
 #include "core/scene.hpp"
 
 namespace cgd {
+
+/// The filter a filtered law is calibrated on (docs/schema-drag-model.md "Calibration"): the particle-centred
+/// box of width Delta, or a coarse grid's TSC deposit and interpolation (Delta = its cell size). One idea whose
+/// spellings -- cgd-fit's --operator, the model file's attribute `operator`, the filtered file's grids'
+/// `operator` -- live in one row each of kCalibrationOperators; the code holds the enum.
+enum class CalibrationOperator { Box, TscGrid };
+struct CalibrationOperatorNames {
+  CalibrationOperator op;
+  const char* option;         // cgd-fit --operator
+  const char* model_file;     // drag model file, root attribute `operator`
+  const char* filtered_file;  // filtered file: the width groups' `kind`, the grids' `operator`
+};
+inline constexpr CalibrationOperatorNames kCalibrationOperators[] = {
+    {CalibrationOperator::Box, "box", "box", "box"},
+    {CalibrationOperator::TscGrid, "grid", "tsc-grid", "tsc-deposit-interpolate"},
+};
+const CalibrationOperatorNames& names_of(CalibrationOperator op);
+/// The operator spelled `text` in `place` (&CalibrationOperatorNames::option, ::model_file), if any.
+std::optional<CalibrationOperator> parse_calibration_operator(const std::string& text,
+                                                              const char* CalibrationOperatorNames::*place);
+/// "\"box\" or \"grid\"": the spellings of `place`, for messages.
+std::string calibration_operator_choices(const char* CalibrationOperatorNames::*place);
+
 
 /// Parcel-size correction of the paper's eq. 9: c_corr = a_c + (1 - a_c) exp(-k_c (alpha - 1)).
 /// (Radl & Sundaresan 2014, proceedings paper, eq. 9; paper values a_c = 0, k_c = 0.05.)
@@ -90,16 +114,25 @@ struct DragModel : PhysicalSystem {
   double width_exponent = 1;  // n of the width dependence 1/(1 + a F^n); 1 = Radl & Sundaresan's form
   double c_corr_a = 0.0, c_corr_k = 0.05;
   std::string c_corr_source;  // "paper" (Radl & Sundaresan 2014) or "parcel-fit"
-  // What the model was calibrated for (docs/schema-drag-model.md "Calibration"): "box" (the particle-
-  // centred box filter of width Delta; files without the attribute) or "tsc-grid" (H_grid of coarse grids,
-  // the TSC deposit+interpolate operator of the grid a coarse run uses, Delta = its cell size).
-  std::string calibration_operator = "box";
+  // What the model was calibrated for (docs/schema-drag-model.md "Calibration"): the particle-centred box
+  // filter of width Delta (files without the attribute) or H_grid of coarse grids, the TSC deposit+interpolate
+  // operator of the grid a coarse run uses, Delta = its cell size.
+  CalibrationOperator calibration_operator = CalibrationOperator::Box;
   std::vector<double> calibrated_delta_m;  // the Delta (box widths or grid cell sizes) fitted; may be empty
   // curves = "table" (cgd-fit --grid-table N): h is the piecewise-linear table of H_grid of one grid
   // (the order-2 B-spline /h through (phi_k, H_k)), held constant outside it, clamped to [-1, h_max], with
   // no phi_crit rule, and a = 0: the correction is 1 - H_grid(phi) at any Delta (meant for grid N's Delta).
   bool table = false;
   std::int64_t table_cells_across = 0;
+
+  // Read for cgd-export, not used by the law: where the file came from and the 95 % bands of H.
+  std::string code_version, created;
+  std::vector<std::int64_t> calibrated_cells_across;
+  std::vector<std::string> source_files, source_checksums;         // /sources: the filtered files fitted
+  std::vector<std::pair<std::string, std::string>> provenance;     // /provenance: made_by, resolved_runs, ...
+  struct Bands {                                                    // /bands (empty: table models, older files)
+    std::vector<double> phi, F, H_low, H_high;                      // H_low, H_high of shape (len(F), len(phi))
+  } bands;
 };
 
 /// Warnings for a run with filter width `delta_m` (the cube root of its cell volume) using `model`:

@@ -19,8 +19,10 @@
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
+#include <type_traits>
 #include <utility>
 
+#include "core/checksum.hpp"
 #include "core/error.hpp"
 
 namespace cgd::h5 {
@@ -178,10 +180,14 @@ OpenAttribute open_attribute(const File& file, const std::string& object, const 
 template <class T>
 std::vector<T> read_numeric_attribute(const File& file, const std::string& object, const std::string& name,
                                       hid_t mem_type) {
+  constexpr bool integer = std::is_integral_v<T>;
   OpenAttribute a = open_attribute(file, object, name);
   const H5T_class_t cls = H5Tget_class(a.type.get());
   if (cls != H5T_INTEGER && cls != H5T_FLOAT)
-    throw_read(file.path(), describe(object, name) + " is not numeric");
+    throw_read(file.path(), describe(object, name) + " is " + (cls == H5T_STRING ? "a string" : "not a number") +
+                                ", expected " + (integer ? "an integer" : "a number"));
+  if (integer && cls != H5T_INTEGER)
+    throw_read(file.path(), describe(object, name) + " is a floating-point number, expected an integer");
   std::vector<T> values(static_cast<std::size_t>(std::max<hssize_t>(a.points, 0)));
   if (!values.empty() && H5Aread(a.attr.get(), mem_type, values.data()) < 0)
     throw_read(file.path(), "cannot read " + describe(object, name) + " (" + hdf5_error_text() + ")");
@@ -202,7 +208,7 @@ std::vector<std::string> read_string_attribute(const File& file, const std::stri
                                                const std::string& name) {
   OpenAttribute a = open_attribute(file, object, name);
   if (H5Tget_class(a.type.get()) != H5T_STRING)
-    throw_read(file.path(), describe(object, name) + " is not a string");
+    throw_read(file.path(), describe(object, name) + " is a number, expected a string");
   const auto n = static_cast<std::size_t>(std::max<hssize_t>(a.points, 0));
   std::vector<std::string> out;
   out.reserve(n);
@@ -407,12 +413,14 @@ void write_replicated_impl(File& file, const std::string& name, const std::vecto
 
 // ---- File: lifetime -----------------------------------------------------------------------------------
 
-File File::create(const std::string& path, MPI_Comm comm) {
+File File::create(const std::string& path, MPI_Comm comm, Seal seal) {
   silence_hdf5_errors();
   Handle fapl(H5Pcreate(H5P_FILE_ACCESS), H5Pclose);
   H5Pset_fapl_mpio(fapl.get(), comm, MPI_INFO_NULL);
   H5Pset_coll_metadata_write(fapl.get(), 1);
-  const hid_t id = H5Fcreate(path.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, fapl.get());
+  Handle fcpl(H5Pcreate(H5P_FILE_CREATE), H5Pclose);
+  if (seal == Seal::Yes) H5Pset_userblock(fcpl.get(), kSealBytes);  // room for the seal (write_atomically fills it)
+  const hid_t id = H5Fcreate(path.c_str(), H5F_ACC_TRUNC, fcpl.get(), fapl.get());
   if (id < 0) throw RunError(path + ": cannot create HDF5 file (" + hdf5_error_text() + ")");
   return File(id, path, comm);
 }
@@ -422,7 +430,9 @@ File File::open_read(const std::string& path, MPI_Comm comm) {
   // Check on rank 0 first and share the verdict, so every rank throws the same clear message.
   int rank = 0;
   MPI_Comm_rank(comm, &rank);
-  int verdict = 0;  // 0 ok, 1 missing, 2 not a regular file, 3 unreadable, 4 not HDF5
+  int verdict = 0;  // 0 ok, 1 missing, 2 not a regular file, 3 unreadable, 4 not HDF5, 5 damaged seal
+  int sealed = 0;
+  std::string seal_problem;
   if (rank == 0) {
     std::error_code ec;
     const auto status = std::filesystem::status(path, ec);
@@ -432,11 +442,28 @@ File File::open_read(const std::string& path, MPI_Comm comm) {
       verdict = 2;
     else if (::access(path.c_str(), R_OK) != 0)
       verdict = 3;
-    else if (H5Fis_hdf5(path.c_str()) <= 0)
-      verdict = 4;
+    else {
+      // the seal first: a damaged file must not reach the HDF5 library, which may crash on it
+      const SealState seal = check_seal(path, &seal_problem);
+      if (seal == SealState::Damaged)
+        verdict = 5;
+      else if (H5Fis_hdf5(path.c_str()) <= 0)
+        verdict = 4;
+      sealed = seal == SealState::Valid ? 1 : 0;
+    }
     H5Eclear2(H5E_DEFAULT);
   }
-  MPI_Bcast(&verdict, 1, MPI_INT, 0, comm);
+  int shared[2] = {verdict, sealed};
+  MPI_Bcast(shared, 2, MPI_INT, 0, comm);
+  verdict = shared[0];
+  if (verdict == 5) {
+    // every rank throws the same message: rank 0 shares its text
+    int length = static_cast<int>(seal_problem.size());
+    MPI_Bcast(&length, 1, MPI_INT, 0, comm);
+    seal_problem.resize(static_cast<std::size_t>(length));
+    MPI_Bcast(seal_problem.data(), length, MPI_CHAR, 0, comm);
+    throw InputError(path + ": damaged: " + seal_problem);
+  }
   static const char* const reasons[] = {"", "no such file", "not a regular file", "permission denied",
                                         "not an HDF5 file"};
   if (verdict != 0) throw InputError(path + ": cannot open as HDF5 (" + reasons[verdict] + ")");
@@ -445,11 +472,14 @@ File File::open_read(const std::string& path, MPI_Comm comm) {
   H5Pset_fapl_mpio(fapl.get(), comm, MPI_INFO_NULL);
   const hid_t id = H5Fopen(path.c_str(), H5F_ACC_RDONLY, fapl.get());
   if (id < 0) throw InputError(path + ": cannot open as HDF5 (" + hdf5_error_text() + ")");
-  return File(id, path, comm);
+  File file(id, path, comm);
+  file.sealed_ = shared[1] != 0;
+  return file;
 }
 
 File::File(File&& other) noexcept
-    : file_(std::exchange(other.file_, -1)), path_(std::move(other.path_)), comm_(other.comm_) {}
+    : file_(std::exchange(other.file_, -1)), path_(std::move(other.path_)), comm_(other.comm_),
+      sealed_(other.sealed_) {}
 
 File& File::operator=(File&& other) noexcept {
   if (this != &other) {
@@ -457,6 +487,7 @@ File& File::operator=(File&& other) noexcept {
     file_ = std::exchange(other.file_, -1);
     path_ = std::move(other.path_);
     comm_ = other.comm_;
+    sealed_ = other.sealed_;
   }
   return *this;
 }
@@ -566,6 +597,12 @@ void File::create_group(const std::string& path) {
   if (!group.valid()) throw_write(path_, "group '" + p + "'");
 }
 
+bool File::is_integer(const std::string& dataset) const {
+  Handle ds = open_dataset(*this, dataset);
+  Handle type(H5Dget_type(ds.get()), H5Tclose);
+  return H5Tget_class(type.get()) == H5T_INTEGER;
+}
+
 std::vector<std::uint64_t> File::dims(const std::string& dataset) const {
   Handle ds = open_dataset(*this, dataset);
   const std::vector<hsize_t> d = dataset_dims(ds);
@@ -618,12 +655,13 @@ void File::write_replicated(const std::string& dataset, const std::vector<std::i
 // ---- free functions
 // ----------------------------------------------------------------------------------------
 
-void write_atomically(const std::string& final_path, MPI_Comm comm, const std::function<void(File&)>& body) {
+void write_atomically(const std::string& final_path, MPI_Comm comm, const std::function<void(File&)>& body,
+                      Seal seal) {
   const std::string tmp_path = final_path + ".tmp";
   int rank = 0;
   MPI_Comm_rank(comm, &rank);
   try {
-    File file = File::create(tmp_path, comm);
+    File file = File::create(tmp_path, comm, seal);
     body(file);
     file.close();
   } catch (...) {
@@ -633,8 +671,16 @@ void write_atomically(const std::string& final_path, MPI_Comm comm, const std::f
   }
   int error = 0;
   if (rank == 0) {
+    try {
+      // the checksum of the complete file into its user block (a no-op for a file without one; a copy of a
+      // sealed file made by update_copy_atomically is sealed again)
+      seal_file(tmp_path);
+    } catch (const RunError&) {
+      error = EIO;
+    }
     // Data on disk before the name appears: fsync the file, rename, then fsync the folder.
-    if (const int fd = ::open(tmp_path.c_str(), O_RDONLY); fd >= 0) {
+    if (error != 0) {
+    } else if (const int fd = ::open(tmp_path.c_str(), O_RDONLY); fd >= 0) {
       if (::fsync(fd) != 0) error = errno;
       ::close(fd);
     } else {
@@ -677,6 +723,74 @@ void update_copy_atomically(const std::string& source_path, const std::string& f
     edit.close();
     fresh = std::move(edit);  // closed: write_atomically's close() is then a no-op
   });
+}
+
+namespace {
+
+/// The HDF5 signature (the superblock's first 8 bytes), found at the end of a kSealBytes user block.
+constexpr char kHdf5Signature[8] = {'\x89', 'H', 'D', 'F', '\r', '\n', '\x1a', '\n'};
+
+bool has_seal_user_block(std::FILE* f) {
+  char sig[8];
+  return std::fseek(f, static_cast<long>(kSealBytes), SEEK_SET) == 0 && std::fread(sig, 1, 8, f) == 8 &&
+         std::memcmp(sig, kHdf5Signature, 8) == 0;
+}
+
+}  // namespace
+
+bool seal_file(const std::string& path) {
+  std::FILE* f = std::fopen(path.c_str(), "r+b");
+  if (!f) throw RunError(path + ": cannot open to write its checksum seal (" + std::strerror(errno) + ")");
+  if (!has_seal_user_block(f)) {
+    std::fclose(f);
+    return false;  // a copy of a file written without a user block (before version 2): left unsealed
+  }
+  std::uint64_t bytes = 0;
+  const std::string hash = file_checksum_fnv1a_from(path, kSealBytes, &bytes);
+  char block[kSealBytes] = {};
+  std::snprintf(block, sizeof block, "%s%s bytes %llu\n", kSealMagic, hash.c_str(),
+                static_cast<unsigned long long>(bytes));
+  const bool ok = std::fseek(f, 0, SEEK_SET) == 0 && std::fwrite(block, 1, kSealBytes, f) == kSealBytes;
+  const bool closed = std::fclose(f) == 0;
+  if (!ok || !closed) throw RunError(path + ": cannot write its checksum seal");
+  return true;
+}
+
+SealState check_seal(const std::string& path, std::string* problem) {
+  std::FILE* f = std::fopen(path.c_str(), "rb");
+  if (!f) return SealState::None;  // the caller reports unreadable files
+  char block[kSealBytes + 1] = {};
+  const std::size_t got = std::fread(block, 1, kSealBytes, f);
+  const bool user_block = got == kSealBytes && has_seal_user_block(f);
+  std::fclose(f);
+  const std::size_t magic = std::strlen(kSealMagic);
+  if (got < magic || std::memcmp(block, kSealMagic, magic) != 0) {
+    // no seal: a file of another writer, or one created with File::create and never sealed (the format
+    // readers refuse an unsealed file of version 2 or later)
+    return SealState::None;
+  }
+  char stored[17] = {};
+  unsigned long long stored_bytes = 0;
+  if (std::sscanf(block + magic, "%16[0-9a-f] bytes %llu", stored, &stored_bytes) != 2 || !user_block) {
+    if (problem) *problem = "its checksum seal (the first 512 bytes) is unreadable; expected \"" +
+                            std::string(kSealMagic) + "<16 hex digits> bytes <n>\" followed by the HDF5 file";
+    return SealState::Damaged;
+  }
+  std::uint64_t bytes = 0;
+  const std::string hash = file_checksum_fnv1a_from(path, kSealBytes, &bytes);
+  if (bytes != stored_bytes) {
+    if (problem)
+      *problem = "found " + std::to_string(bytes) + " bytes after the seal, expected " +
+                 std::to_string(stored_bytes) + (bytes < stored_bytes ? " (cut short)" : " (bytes added)");
+    return SealState::Damaged;
+  }
+  if (hash != stored) {
+    if (problem)
+      *problem = "its contents do not match the checksum written with it (FNV-1a " + hash + ", expected " +
+                 stored + "): bytes were changed since it was written";
+    return SealState::Damaged;
+  }
+  return SealState::Valid;
 }
 
 bool is_hdf5(const std::string& path) {

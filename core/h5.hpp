@@ -5,6 +5,7 @@
 #include <hdf5.h>
 #include <mpi.h>
 
+#include <cstddef>
 #include <cstdint>
 #include <functional>
 #include <string>
@@ -13,13 +14,17 @@
 namespace cgd::h5 {
 
 class File;
+/// Whether a file gets cgd's checksum seal (kSealBytes below): only the formats that need it (checkpoints,
+/// core/schema/check.hpp) ask for it.
+enum class Seal { No, Yes };
 void update_copy_atomically(const std::string& source_path, const std::string& final_path,
                             const std::function<void(File&)>& body);
 
 class File {
  public:
-  /// Create (truncate) `path` for parallel writing over `comm`. Collective.
-  static File create(const std::string& path, MPI_Comm comm);
+  /// Create (truncate) `path` for parallel writing over `comm`; with Seal::Yes it starts with the user
+  /// block of the checksum seal (filled by write_atomically). Collective.
+  static File create(const std::string& path, MPI_Comm comm, Seal seal = Seal::No);
   /// Open an existing file read-only over `comm`. Collective. InputError if missing or not HDF5.
   static File open_read(const std::string& path, MPI_Comm comm);
 
@@ -31,6 +36,8 @@ class File {
   void close();  // collective; idempotent
 
   hid_t id() const { return file_; }
+  /// True if the file carries cgd's checksum seal (verified by open_read; see seal_file below).
+  bool sealed() const { return sealed_; }
   const std::string& path() const { return path_; }
   MPI_Comm comm() const { return comm_; }
 
@@ -54,6 +61,8 @@ class File {
   bool exists(const std::string& path) const;      // a group or dataset
   void create_group(const std::string& path);      // with intermediate groups; collective
   std::vector<std::uint64_t> dims(const std::string& dataset) const;
+  /// True if `dataset` is stored as integers (false: floating point or anything else).
+  bool is_integer(const std::string& dataset) const;
 
   /// Distributed rows: a (total_rows x cols) dataset (cols = 1 gives a 1-D dataset) whose rows are
   /// the concatenation of every rank's `local_rows` rows in rank order. Collective.
@@ -85,12 +94,35 @@ class File {
   hid_t file_ = -1;
   std::string path_;
   MPI_Comm comm_ = MPI_COMM_NULL;
+  bool sealed_ = false;
 };
+
+/// The checksum seal (checkpoints of version 2, docs/schema-run.md "Seal and validation"): File::create
+/// with Seal::Yes reserves an HDF5 user block of kSealBytes at the start of the file (HDF5 and h5py skip
+/// it); write_atomically fills it, once the file is closed, with one line
+///   "cgd-seal fnv1a64 <16 hex digits> bytes <n>\n"
+/// -- the FNV-1a 64-bit hash (core/checksum.hpp) and length of every byte after the user block --
+/// padded with zeros. File::open_read checks it before HDF5 parses anything, so a file cut short or with
+/// overwritten bytes is refused with an InputError instead of reaching the library (which can crash on
+/// damaged metadata) or the tool (which would take damaged numbers as data).
+inline constexpr std::size_t kSealBytes = 512;
+inline constexpr const char* kSealMagic = "cgd-seal fnv1a64 ";
+
+/// Rewrites the seal of `path` (a closed file with a kSealBytes user block; no-op for a file without
+/// one). Returns false if the file has no user block. Throws RunError when the file cannot be written.
+bool seal_file(const std::string& path);
+
+/// What the start of `path` says: no seal (no user block, or one not written by cgd), or a seal whose
+/// hash and length match (ok) or not. `problem` gets a one-line description of a mismatch.
+enum class SealState { None, Valid, Damaged };
+SealState check_seal(const std::string& path, std::string* problem);
 
 /// Write `final_path` atomically: `body` fills a file created at a temporary name in the same
 /// folder; after a collective close rank 0 fsyncs and renames it into place, so a reader (or a
-/// run killed at any moment) never sees a half-written file. Collective.
-void write_atomically(const std::string& final_path, MPI_Comm comm, const std::function<void(File&)>& body);
+/// run killed at any moment) never sees a half-written file; with Seal::Yes the file is sealed before it is
+/// renamed. Collective.
+void write_atomically(const std::string& final_path, MPI_Comm comm, const std::function<void(File&)>& body,
+                      Seal seal = Seal::No);
 
 /// Write `final_path` atomically as a modified copy of `source_path`: the source is copied to a temporary
 /// name, opened read-write for `body`, then moved into place as write_atomically does. Calling rank

@@ -152,9 +152,9 @@ struct ParticleArray {
 
 }  // namespace
 
-void write_common(h5::File& file, const char* format, const Scene& scene) {
-  file.set_attr("/", "cgd_format", std::string(format));
-  file.set_attr("/", "cgd_format_version", kFormatVersion);
+void write_common(h5::File& file, const Format& format, const Scene& scene) {
+  file.set_attr("/", "cgd_format", std::string(format.name));
+  file.set_attr("/", "cgd_format_version", format.version);
   file.set_attr("/", "code_version", std::string(CGD_VERSION));
   file.set_attr("/", "created", utc_now_iso8601(file.comm()));
   file.set_attr("/", "scene", scene.effective_toml);
@@ -219,7 +219,7 @@ void write_snapshot(const std::string& path, MPI_Comm comm, const Scene& scene, 
   if (!problem.empty()) throw RunError(path + ": cannot write snapshot: " + problem);
 
   h5::write_atomically(path, comm, [&](h5::File& f) {
-    write_common(f, "snapshot", scene);
+    write_common(f, kSnapshot, scene);
     f.set_attr("/", "time", time_s);
     f.set_attr("/", "step", step);
 

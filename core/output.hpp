@@ -8,16 +8,16 @@
 
 #include "core/h5.hpp"
 #include "core/scene.hpp"
+#include "core/schema/check.hpp"  // Format
 #include "core/series.hpp"  // schema::Series, the run's series.h5
 
 namespace cgd::schema {
 
-inline constexpr std::int64_t kFormatVersion = 1;
-
-/// Root attributes every cgd file carries: cgd_format, cgd_format_version, code_version, created
+/// Root attributes every cgd file carries: cgd_format, cgd_format_version (format's row in
+/// core/schema/check.hpp), code_version, created
 /// (ISO 8601 UTC), scene (the effective scene as TOML text); and group /params with every physical
 /// and derived parameter of the scene as attributes (SI, names with units). Collective.
-void write_common(h5::File& file, const char* format, const Scene& scene);
+void write_common(h5::File& file, const Format& format, const Scene& scene);
 
 /// This rank's owned particles as views (SoA, vectors interleaved xyz). Optional fields are nullptr
 /// when the run does not simulate them (then the dataset is absent from the file).

@@ -58,18 +58,6 @@ double gravity_from_scales(double u_t_m_s, double l_char_m, double diameter_m) {
   return u_t_m_s * u_t_m_s / (diameter_m * std::pow(l_char_m / diameter_m, 3));
 }
 
-void check_derived_format(const h5::File& f, const char* format, const std::string& what, const std::string& hint) {
-  const std::string& path = f.path();
-  for (const char* key : {"cgd_format", "cgd_format_version"})
-    if (!f.has_attr("/", key)) throw InputError(path + ": " + what + " lacks the root attribute " + key);
-  const std::string given = f.attr_string("/", "cgd_format");
-  if (given != format)
-    throw InputError(path + ": cgd_format = \"" + given + "\": not a " + what + " (" + hint + ")");
-  if (f.attr_int("/", "cgd_format_version") != schema::kFormatVersion)
-    throw InputError(path + ": cgd_format_version = " + std::to_string(f.attr_int("/", "cgd_format_version")) +
-                     ": this build reads version " + std::to_string(schema::kFormatVersion));
-}
-
 void write_physical_system(h5::File& f, const PhysicalSystem& system, const char* law_key) {
   f.set_attr("/", law_key, std::string(to_string(system.micro_drag)));
   for (const SystemField& field : kSystemFields) f.set_attr("/", field.file_key, system.*field.member);
@@ -81,11 +69,18 @@ PhysicalSystem read_physical_system(const h5::File& f, const char* law_key, cons
     if (!f.has_attr("/", key)) throw InputError(path + ": " + what + " lacks the root attribute " + key);
   };
   need(law_key);
+  // every field of a physical system is a size, a density, a speed or a viscosity: finite and positive
+  auto positive_attr = [&](const char* key) {
+    const double v = schema::finite_attr(f, "/", key);
+    if (!(v > 0))
+      throw InputError(path + ": attribute '" + key + "' of '/' is " + number(v) + ", expected a positive number");
+    return v;
+  };
   PhysicalSystem s;
   for (const SystemField& field : kSystemFields) {
     if (field.member == &PhysicalSystem::gravity_m_s2) continue;  // optional in older files: below
     need(field.file_key);
-    s.*field.member = f.attr_double("/", field.file_key);
+    s.*field.member = positive_attr(field.file_key);
   }
   const std::string law = f.attr_string("/", law_key);
   if (const auto micro = microscopic_drag_law(law))
@@ -93,7 +88,7 @@ PhysicalSystem read_physical_system(const h5::File& f, const char* law_key, cons
   else
     throw InputError(path + ": " + law_key + " = \"" + law + "\": the " + what +
                      "'s law must be a microscopic law (" + drag_law_names(DragKind::Micro) + ")");
-  s.gravity_m_s2 = f.has_attr("/", "gravity_m_s2") ? f.attr_double("/", "gravity_m_s2")
+  s.gravity_m_s2 = f.has_attr("/", "gravity_m_s2") ? positive_attr("gravity_m_s2")
                                                    : gravity_from_scales(s.u_t_m_s, s.l_char_m, s.diameter_m);
   return s;
 }

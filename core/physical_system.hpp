@@ -44,12 +44,6 @@ PhysicalSystem physical_system(const Scene& scene, DragLaw base_law = DragLaw::B
 /// written before gravity_m_s2 was stored (filtered files).
 double gravity_from_scales(double u_t_m_s, double l_char_m, double diameter_m);
 
-/// The first check of a derived file's reader: InputError naming the file unless its root attribute
-/// cgd_format is `format` and cgd_format_version is this build's (schema::kFormatVersion): "<path>: <what>
-/// lacks the root attribute cgd_format", "<path>: cgd_format = \"X\": not a <what> (<hint>)", "<path>:
-/// cgd_format_version = N: this build reads version 1".
-void check_derived_format(const h5::File& f, const char* format, const std::string& what, const std::string& hint);
-
 /// Writes the system as root attributes of `f`, the law under `law_key` ("micro_drag", "base_drag").
 void write_physical_system(h5::File& f, const PhysicalSystem& system, const char* law_key);
 

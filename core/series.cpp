@@ -69,7 +69,7 @@ const std::vector<double>& Series::column(const std::string& name) const {
 
 void Series::write(const std::string& path, MPI_Comm comm, const Scene& scene) const {
   h5::write_atomically(path, comm, [&](h5::File& f) {
-    write_common(f, "series", scene);
+    write_common(f, kSeries, scene);
     std::vector<std::string> names;
     for (const Column& c : columns_) names.push_back(c.name);
     f.set_attr("/", "columns", names);
@@ -87,28 +87,44 @@ void Series::write(const std::string& path, MPI_Comm comm, const Scene& scene) c
 
 Series Series::read(const std::string& path, MPI_Comm comm) {
   h5::File f = h5::File::open_read(path, comm);
-  const std::string format = f.has_attr("/", "cgd_format") ? f.attr_string("/", "cgd_format") : "";
-  if (format != "series")
-    throw InputError(path + ": not a cgd series file (cgd_format = '" + format + "', expected 'series')");
+  schema::check_format(f, kSeries);
   Series s;
   if (f.has_attr("/", "warnings")) s.warnings_ = f.attr_strings("/", "warnings");
-  for (const std::string& name : f.attr_strings("/", "columns")) {
+  const std::vector<std::string> names = f.attr_strings("/", "columns");
+  if (names.empty() || names.front() != "time")
+    throw InputError(path + ": attribute 'columns' of '/' " +
+                     (names.empty() ? std::string("is empty") : "starts with '" + names.front() + "'") +
+                     ", expected the column 'time' first");
+  for (const std::string& name : names) {
     const std::string dataset = "/" + name;
+    if (!f.exists(dataset))
+      throw InputError(path + ": no dataset '" + dataset + "', expected the column the attribute 'columns' lists");
     const std::vector<std::uint64_t> dims = f.dims(dataset);
     if (dims.empty() || dims.size() > 2)
-      throw InputError(path + ": series column '" + name + "' is not a 1-D or 2-D array");
+      throw InputError(path + ": dataset '" + dataset + "' has shape " + shape_text(dims) +
+                       ", expected a series column of shape (rows,) or (rows, width)");
     Column c;
     c.name = name;
     c.width = dims.size() == 2 ? static_cast<int>(dims[1]) : 1;
     c.unit = f.has_attr(dataset, "unit") ? f.attr_string(dataset, "unit") : "";
-    c.values = f.read_double(dataset);
-    if (s.columns_.empty())
+    // the time column orders the rows (a restart cuts the series back by it): finite and non-decreasing
+    c.values = read_doubles(f, dataset, dims, s.columns_.empty() ? Finite::Everywhere : Finite::Not);
+    if (s.columns_.empty()) {
       s.rows_ = dims[0];
-    else if (dims[0] != s.rows_)
-      throw InputError(path + ": series column '" + name + "' has " + std::to_string(dims[0]) + " rows, '" +
-                       s.columns_.front().name + "' has " + std::to_string(s.rows_));
+      for (std::size_t r = 1; r < c.values.size(); ++r)
+        if (c.values[r] < c.values[r - 1])
+          throw InputError(path + ": dataset '/time' decreases at row " + std::to_string(r) + " (" +
+                           std::to_string(c.values[r - 1]) + " then " + std::to_string(c.values[r]) +
+                           "), expected non-decreasing times");
+    } else if (dims[0] != s.rows_) {
+      throw InputError(path + ": dataset '" + dataset + "' has " + std::to_string(dims[0]) + " rows, expected " +
+                       std::to_string(s.rows_) + " (the rows of '/time')");
+    }
     s.columns_.push_back(std::move(c));
   }
+  if (const std::int64_t rows = f.attr_int("/", "rows"); rows != static_cast<std::int64_t>(s.rows_))
+    throw InputError(path + ": attribute 'rows' of '/' is " + std::to_string(rows) + ", expected " +
+                     std::to_string(s.rows_) + " (the rows of '/time')");
   f.close();
   return s;
 }

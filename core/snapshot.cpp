@@ -8,6 +8,7 @@
 
 #include "core/error.hpp"
 #include "core/h5.hpp"
+#include "core/schema/check.hpp"
 
 namespace cgd {
 
@@ -15,33 +16,45 @@ namespace fs = std::filesystem;
 
 namespace {
 
+/// /params of a snapshot: every attribute the reader takes, of its type, finite, and positive where a
+/// size or a density must be.
 RunPhysics read_physics(const h5::File& f) {
   RunPhysics p;
   const std::string g = "/params";
-  if (!f.exists(g)) throw InputError(f.path() + ": no /params group (not a cgd file of schema version 1)");
+  if (!f.exists(g)) throw InputError(f.path() + ": no group /params, expected the scene's parameters there");
+  auto positive = [&](const char* name) {
+    const double v = schema::finite_attr(f, g, name);
+    if (!(v > 0))
+      throw InputError(f.path() + ": attribute '" + name + "' of '/params' is " + std::to_string(v) +
+                       ", expected a positive number");
+    return v;
+  };
   auto vec3 = [&](const char* name) {
-    const std::vector<double> v = f.attr_doubles(g, name);
-    if (v.size() != 3) throw InputError(f.path() + ": /params attribute '" + name + "' has " + std::to_string(v.size()) + " values, expected 3");
+    const std::vector<double> v = schema::finite_attrs(f, g, name, 3);
     return std::array<double, 3>{v[0], v[1], v[2]};
   };
   p.scene_name = f.attr_string(g, "scene_name");
   p.scene_toml = f.has_attr("/", "scene") ? f.attr_string("/", "scene") : "";
-  p.diameter_m = f.attr_double(g, "diameter_m");
-  p.particle_density_kg_m3 = f.attr_double(g, "density_kg_m3");
-  p.parcel_size = f.attr_double(g, "parcel_size");
-  p.solids_fraction = f.attr_double(g, "solids_fraction");
+  p.diameter_m = positive("diameter_m");
+  p.particle_density_kg_m3 = positive("density_kg_m3");
+  p.parcel_size = positive("parcel_size");
+  p.solids_fraction = schema::finite_attr(f, g, "solids_fraction");
   p.box_size_m = vec3("box_size_m");
+  for (double edge : p.box_size_m)
+    if (!(edge > 0))
+      throw InputError(f.path() + ": attribute 'box_size_m' of '/params' holds " + std::to_string(edge) +
+                       ", expected positive edges");
   p.gravity_m_s2 = vec3("gravity_m_s2");
   p.has_fluid = f.attr_int(g, "has_fluid") != 0;
   if (p.has_fluid) {
-    p.fluid_density_kg_m3 = f.attr_double(g, "fluid_density_kg_m3");
-    p.fluid_viscosity_Pa_s = f.attr_double(g, "fluid_viscosity_Pa_s");
+    p.fluid_density_kg_m3 = positive("fluid_density_kg_m3");
+    p.fluid_viscosity_Pa_s = positive("fluid_viscosity_Pa_s");
     p.drag = f.attr_string(g, "drag");
     p.coupling = f.attr_string(g, "coupling");
     p.pressure_gradient_force = f.attr_int(g, "pressure_gradient_force") != 0;
-    p.u_t_m_s = f.attr_double(g, "u_t_m_s");
-    p.l_char_m = f.attr_double(g, "l_char_m");
-    p.t_ref_s = f.attr_double(g, "t_ref_s");
+    p.u_t_m_s = positive("u_t_m_s");
+    p.l_char_m = positive("l_char_m");
+    p.t_ref_s = positive("t_ref_s");
   }
   return p;
 }
@@ -60,77 +73,94 @@ PhysicalSystem RunPhysics::system() const {
                         fluid_viscosity_Pa_s,   std::sqrt(g[0] * g[0] + g[1] * g[1] + g[2] * g[2])};
 }
 
-namespace {
-
-template <class T>
-void check_rows(const std::string& path, const std::string& name, const std::vector<T>& v, std::int64_t rows, int cols) {
-  if (static_cast<std::int64_t>(v.size()) != rows * cols)
-    throw InputError(path + ": dataset '" + name + "' holds " + std::to_string(v.size()) + " values, expected " +
-                     std::to_string(rows) + " x " + std::to_string(cols));
-}
-
-}  // namespace
-
 Snapshot read_snapshot(const std::string& path, SnapshotContent content, MPI_Comm comm) {
+  using schema::Finite;
   h5::File f = h5::File::open_read(path, comm);
+  schema::check_format(f, schema::kSnapshot);
   Snapshot s;
   s.path = path;
-  if (!f.has_attr("/", "cgd_format"))
-    throw InputError(path + ": not a cgd file (no root attribute 'cgd_format'; expected 'snapshot')");
-  const std::string format = f.attr_string("/", "cgd_format");
-  if (format != "snapshot")
-    throw InputError(path + ": cgd_format is '" + format + "', expected 'snapshot'");
-  s.time_s = f.attr_double("/", "time");
+  s.time_s = schema::finite_attr(f, "/", "time");
   s.step = f.attr_int("/", "step");
+  if (s.step < 0) throw InputError(path + ": attribute 'step' of '/' is " + std::to_string(s.step) + ", expected >= 0");
   s.physics = read_physics(f);
-  if (!f.exists("/particles/id")) throw InputError(path + ": no dataset /particles/id");
-  s.count = static_cast<std::int64_t>(f.dims("/particles/id").at(0));
+
+  // Every particle array holds N rows, N the length of /particles/id.
+  const std::string n_rows = "N particles, the length of /particles/id";
+  const std::uint64_t n = schema::require_shape(f, "/particles/id", {schema::kAnyExtent}).at(0);
+  s.count = static_cast<std::int64_t>(n);
+  const bool coupled = f.exists("/particles/drag_coefficient");
+  const std::vector<std::pair<const char*, std::vector<std::uint64_t>>> particle_shapes = {
+      {"/particles/position", {n, 3}}, {"/particles/velocity", {n, 3}}, {"/particles/diameter", {n}}};
+  for (const auto& [name, shape] : particle_shapes) schema::require_shape(f, name, shape, n_rows);
+  if (f.exists("/particles/angular_velocity")) schema::require_shape(f, "/particles/angular_velocity", {n, 3}, n_rows);
+  if (coupled)  // the fluid's values at the particles come together (core/output.cpp)
+    for (const auto& [name, shape] : std::vector<std::pair<const char*, std::vector<std::uint64_t>>>{
+             {"/particles/fluid_velocity", {n, 3}}, {"/particles/pressure_gradient", {n, 3}}})
+      schema::require_shape(f, name, shape, n_rows + "; written with /particles/drag_coefficient");
+
   s.has_fluid = f.exists("/fluid");
+  std::vector<std::uint64_t> cells3, cells3x3;  // (n_z, n_y, n_x) and (n_z, n_y, n_x, 3)
   if (s.has_fluid) {
     const std::vector<std::int64_t> cells = f.attr_ints("/fluid", "cells");
-    const std::vector<double> spacing = f.attr_doubles("/fluid", "spacing"), origin = f.attr_doubles("/fluid", "origin");
-    if (cells.size() != 3 || spacing.size() != 3 || origin.size() != 3)
-      throw InputError(path + ": /fluid attributes cells, spacing, origin must hold 3 values each");
+    if (cells.size() != 3)
+      throw InputError(path + ": attribute 'cells' of '/fluid' holds " + std::to_string(cells.size()) +
+                       " values, expected 3 (x, y, z)");
+    const std::vector<double> spacing = schema::finite_attrs(f, "/fluid", "spacing", 3);
+    const std::vector<double> origin = schema::finite_attrs(f, "/fluid", "origin", 3);
     for (int a = 0; a < 3; ++a) {
-      if (cells[a] <= 0 || !(spacing[a] > 0))
+      if (cells[a] <= 0 || cells[a] > (1 << 20) || !(spacing[a] > 0))
         throw InputError(path + ": /fluid has cells " + std::to_string(cells[a]) + " and spacing " +
-                         std::to_string(spacing[a]) + " along axis " + std::to_string(a) + "; both must be > 0");
+                         std::to_string(spacing[a]) + " along axis " + std::to_string(a) +
+                         ", expected a positive cell count and spacing");
       s.grid.cells[a] = static_cast<int>(cells[a]);
       s.grid.spacing_m[a] = spacing[a];
       s.grid.origin_m[a] = origin[a];
     }
+    cells3 = {static_cast<std::uint64_t>(cells[2]), static_cast<std::uint64_t>(cells[1]),
+              static_cast<std::uint64_t>(cells[0])};
+    cells3x3 = cells3;
+    cells3x3.push_back(3);
+    const std::string grid = "the grid's cells, /fluid attribute 'cells' = (" + std::to_string(cells[0]) + ", " +
+                             std::to_string(cells[1]) + ", " + std::to_string(cells[2]) + ")";
+    schema::require_shape(f, "/fluid/void_fraction", cells3, grid);
+    schema::require_shape(f, "/fluid/pressure", cells3, grid);
+    schema::require_shape(f, "/fluid/velocity", cells3x3, grid);
+    if (f.exists("/fluid/eps_velocity")) schema::require_shape(f, "/fluid/eps_velocity", cells3x3, grid);
   }
   if (content == SnapshotContent::HeaderOnly) return s;
 
-  s.id = f.read_int("/particles/id");
-  s.position = f.read_double("/particles/position");
-  s.velocity = f.read_double("/particles/velocity");
-  check_rows(path, "/particles/position", s.position, s.count, 3);
-  check_rows(path, "/particles/velocity", s.velocity, s.count, 3);
-  if (f.exists("/particles/drag_coefficient")) {
-    s.drag_coefficient = f.read_double("/particles/drag_coefficient");
-    s.fluid_velocity = f.read_double("/particles/fluid_velocity");
-    s.pressure_gradient = f.read_double("/particles/pressure_gradient");
-    check_rows(path, "/particles/drag_coefficient", s.drag_coefficient, s.count, 1);
-    check_rows(path, "/particles/fluid_velocity", s.fluid_velocity, s.count, 3);
-    check_rows(path, "/particles/pressure_gradient", s.pressure_gradient, s.count, 3);
+  s.id = schema::read_ints(f, "/particles/id", {n});
+  std::vector<char> seen(n, 0);
+  for (std::size_t i = 0; i < n; ++i) {
+    const std::int64_t id = s.id[i];
+    if (id < 0 || static_cast<std::uint64_t>(id) >= n || seen[static_cast<std::size_t>(id)])
+      throw InputError(path + ": dataset '/particles/id' holds " + std::to_string(id) + " at row " + std::to_string(i) +
+                       ", expected distinct ids in [0, " + std::to_string(n) + ")");
+    seen[static_cast<std::size_t>(id)] = 1;
+  }
+  s.position = schema::read_doubles(f, "/particles/position", {n, 3}, Finite::Everywhere, n_rows);
+  s.velocity = schema::read_doubles(f, "/particles/velocity", {n, 3}, Finite::Everywhere, n_rows);
+  if (coupled) {
+    s.drag_coefficient = schema::read_doubles(f, "/particles/drag_coefficient", {n}, Finite::Everywhere, n_rows);
+    s.fluid_velocity = schema::read_doubles(f, "/particles/fluid_velocity", {n, 3}, Finite::Everywhere, n_rows);
+    s.pressure_gradient = schema::read_doubles(f, "/particles/pressure_gradient", {n, 3}, Finite::Everywhere, n_rows);
   }
   if (!s.has_fluid) return s;
-  const auto n = static_cast<std::int64_t>(s.grid.cell_count());
-  s.void_fraction = f.read_double("/fluid/void_fraction");
-  s.pressure = f.read_double("/fluid/pressure");
-  check_rows(path, "/fluid/void_fraction", s.void_fraction, n, 1);
-  check_rows(path, "/fluid/pressure", s.pressure, n, 1);
-  s.cell_velocity = f.read_double("/fluid/velocity");
-  check_rows(path, "/fluid/velocity", s.cell_velocity, n, 3);
+  const auto cells = static_cast<std::int64_t>(s.grid.cell_count());
+  s.void_fraction = schema::read_doubles(f, "/fluid/void_fraction", cells3, Finite::Everywhere);
+  for (std::int64_t c = 0; c < cells; ++c)
+    if (!(s.void_fraction[c] > 0))
+      throw InputError(path + ": dataset '/fluid/void_fraction' holds " + std::to_string(s.void_fraction[c]) +
+                       " at cell " + std::to_string(c) + ", expected values > 0");
+  s.pressure = schema::read_doubles(f, "/fluid/pressure", cells3, Finite::Everywhere);
+  s.cell_velocity = schema::read_doubles(f, "/fluid/velocity", cells3x3, Finite::Everywhere);
   if (f.exists("/fluid/eps_velocity")) {
-    s.eps_velocity = f.read_double("/fluid/eps_velocity");
-    check_rows(path, "/fluid/eps_velocity", s.eps_velocity, n, 3);
+    s.eps_velocity = schema::read_doubles(f, "/fluid/eps_velocity", cells3x3, Finite::Everywhere);
     s.eps_velocity_from_file = true;
   } else {
     const std::vector<double>& u = s.cell_velocity;
     s.eps_velocity.resize(u.size());
-    for (std::int64_t c = 0; c < n; ++c)
+    for (std::int64_t c = 0; c < cells; ++c)
       for (int d = 0; d < 3; ++d) s.eps_velocity[3 * c + d] = s.void_fraction[c] * u[3 * c + d];
   }
   return s;

@@ -12,6 +12,7 @@
 
 #include "core/checksum.hpp"
 #include "core/error.hpp"
+#include "core/filtered_drag.hpp"  // CalibrationOperator
 #include "core/h5.hpp"
 #include "core/timers.hpp"
 #include "core/output.hpp"
@@ -286,10 +287,10 @@ void write_filtered_file(const FilterPlan& plan, const FilterOptions& o, const s
                 << " gets the run's scene text without the common /params\n";
     }
     if (scene_ok) {
-      schema::write_common(f, "filtered", scene);
+      schema::write_common(f, schema::kFiltered, scene);
     } else {
-      f.set_attr("/", "cgd_format", std::string("filtered"));
-      f.set_attr("/", "cgd_format_version", schema::kFormatVersion);
+      f.set_attr("/", "cgd_format", std::string(schema::kFiltered.name));
+      f.set_attr("/", "cgd_format_version", schema::kFiltered.version);
       f.set_attr("/", "code_version", std::string(CGD_VERSION));
       f.set_attr("/", "scene", r0.physics.scene_toml);
     }
@@ -359,7 +360,7 @@ void write_filtered_file(const FilterPlan& plan, const FilterOptions& o, const s
       f.create_group("/grids");
       std::vector<std::int64_t> across(plan.grids.begin(), plan.grids.end());
       f.set_attr("/grids", "cells_across", across);
-      f.set_attr("/grids", "operator", std::string("tsc-deposit-interpolate"));
+      f.set_attr("/grids", "operator", std::string(names_of(CalibrationOperator::TscGrid).filtered_file));
       f.set_attr("/grids", "definition",
                  std::string("per coarse grid (the grid a coarse run with cells_across cells along x builds): phi = TSC "
                              "deposit of the particles' volume on the coarse cells with the coupler's conservative floor; "
@@ -388,7 +389,7 @@ void write_filtered_file(const FilterPlan& plan, const FilterOptions& o, const s
         f.set_attr(g, "cell_size_m", c.grid.cell_size_m());
         f.set_attr(g, "cell_size_over_dp", c.grid.cell_size_m() / p.diameter_m);
         f.set_attr(g, "kernel", std::string("tsc"));
-        f.set_attr(g, "operator", std::string("tsc-deposit-interpolate"));
+        f.set_attr(g, "operator", std::string(names_of(CalibrationOperator::TscGrid).filtered_file));
         f.set_attr(g, "void_fraction_floor", c.void_fraction_floor);
         const EquivalentWidth& e = equivalent[gi];
         f.set_attr(g, "equivalent_width_m", e.width_m);

@@ -14,7 +14,6 @@
 #include "core/cli.hpp"
 #include "core/error.hpp"
 #include "core/filtered_drag.hpp"
-#include "core/h5.hpp"
 #include "core/scene.hpp"
 #include "core/text_file.hpp"
 #include "fit/export_model.hpp"
@@ -25,43 +24,23 @@ namespace {
 
 /// What the header's comment says about where the model came from, beyond the in-memory model: the file's
 /// code_version and created, its /provenance text and its /sources (the filtered files and their checksums).
-std::vector<std::string> model_provenance(const cgd::h5::File& f) {
+/// The lines of the header's provenance: who wrote the model, the grids and filtered files it was fitted on.
+std::vector<std::string> model_provenance(const cgd::DragModel& m) {
   std::vector<std::string> out;
   std::string made = "written by cgd";
-  if (f.has_attr("/", "code_version")) made += " " + f.attr_string("/", "code_version");
-  if (f.has_attr("/", "created")) made += " on " + f.attr_string("/", "created");
+  if (!m.code_version.empty()) made += " " + m.code_version;
+  if (!m.created.empty()) made += " on " + m.created;
   out.push_back(made);
-  if (f.has_attr("/", "calibrated_cells_across")) {
+  if (!m.calibrated_cells_across.empty()) {
     std::string grids = "calibrated grids:";
-    for (std::int64_t n : f.attr_ints("/", "calibrated_cells_across")) grids += " " + std::to_string(n);
+    for (std::int64_t n : m.calibrated_cells_across) grids += " " + std::to_string(n);
     out.push_back(grids + " cells across");
   }
-  if (f.exists("/sources") && f.has_attr("/sources", "files")) {
-    const auto files = f.attr_strings("/sources", "files");
-    std::vector<std::string> sums;
-    if (f.has_attr("/sources", "checksums")) sums = f.attr_strings("/sources", "checksums");
-    for (std::size_t i = 0; i < files.size(); ++i)
-      out.push_back("filtered file: " + files[i] + (i < sums.size() ? " (checksum " + sums[i] + ")" : ""));
-  }
-  if (f.exists("/provenance"))
-    for (const char* key : {"made_by", "resolved_runs", "valid_for", "validation"})
-      if (f.has_attr("/provenance", key)) out.push_back(std::string(key) + ": " + f.attr_string("/provenance", key));
+  for (std::size_t i = 0; i < m.source_files.size(); ++i)
+    out.push_back("filtered file: " + m.source_files[i] +
+                  (i < m.source_checksums.size() ? " (checksum " + m.source_checksums[i] + ")" : ""));
+  for (const auto& [key, text] : m.provenance) out.push_back(key + ": " + text);
   return out;
-}
-
-/// The model file's /bands (empty when it has none: table models, older files).
-cgd::exporter::Bands model_bands(const cgd::h5::File& f, const std::string& path) {
-  cgd::exporter::Bands b;
-  if (!f.exists("/bands/phi") || !f.exists("/bands/F") || !f.exists("/bands/H_low") || !f.exists("/bands/H_high"))
-    return b;
-  b.phi = f.read_double("/bands/phi");
-  b.F = f.read_double("/bands/F");
-  b.H_low = f.read_double("/bands/H_low");
-  b.H_high = f.read_double("/bands/H_high");
-  if (b.H_low.size() != b.phi.size() * b.F.size() || b.H_high.size() != b.H_low.size())
-    throw cgd::InputError(path + ": /bands/H_low, H_high: shape is not (len(F), len(phi)) = (" +
-                          std::to_string(b.F.size()) + ", " + std::to_string(b.phi.size()) + ")");
-  return b;
 }
 
 std::string default_name(const std::string& stem) {
@@ -139,9 +118,8 @@ int main(int argc, char** argv) {
     std::vector<double> phis, deltas;
     if (!radl) {
       model = cgd::load_drag_model(model_path);
-      const cgd::h5::File f = cgd::h5::File::open_read(model_path, MPI_COMM_SELF);
-      e = cgd::exporter::from_model(*model, name, model_provenance(f));
-      bands = model_bands(f, model_path);
+      e = cgd::exporter::from_model(*model, name, model_provenance(*model));
+      bands = {model->bands.phi, model->bands.F, model->bands.H_low, model->bands.H_high};
       deltas = e.calibrated_delta_m;
     } else {
       double d = 0;

@@ -170,7 +170,7 @@ ExportedModel from_model(const DragModel& m, const std::string& name, const std:
   e.provenance.push_back("curves: " + std::string(m.table ? "table (cgd-fit --grid-table " +
                                                                 std::to_string(m.table_cells_across) + ")"
                                                           : "splines") +
-                         ", calibration operator " + m.calibration_operator + ", base law " + e.base_drag +
+                         ", calibration operator " + names_of(m.calibration_operator).model_file + ", base law " + e.base_drag +
                          ", c_corr source " + m.c_corr_source);
   if (!e.calibrated_delta_m.empty()) {
     std::string cal = "calibrated Delta:";

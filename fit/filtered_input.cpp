@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <functional>
 
 #include "core/checksum.hpp"
 #include "core/drag.hpp"
@@ -30,10 +31,7 @@ FilteredFile read_filtered_file(const std::string& path) {
       throw InputError(path + ": filtered file lacks the attribute " + key +
                        (object == "/" ? "" : " of " + object));
   };
-  auto need = [&](const std::string& dataset) {
-    if (!f.exists(dataset)) throw InputError(path + ": filtered file lacks the dataset " + dataset);
-  };
-  check_derived_format(f, "filtered", "filtered file", "cgd-fit reads the \"filtered\" files of cgd-filter");
+  schema::check_format(f, schema::kFiltered);
   FilteredFile out;
   out.path = path;
   need_attr("/", "scene");
@@ -42,25 +40,31 @@ FilteredFile read_filtered_file(const std::string& path) {
   const PhysicalSystem& p = out.physics;
   if (!(p.l_char_m > 0)) throw InputError(path + ": l_char_m = " + number(p.l_char_m) + ": must be > 0");
 
-  need("/bins/phi_edges");
-  out.phi_edges = f.read_double("/bins/phi_edges");
+  using schema::Finite;
+  using schema::kAnyExtent;
+  out.phi_edges = schema::read_doubles(f, "/bins/phi_edges", {kAnyExtent}, Finite::Everywhere);
   const std::size_t nb = out.bins();
-  if (nb < 1 || !std::is_sorted(out.phi_edges.begin(), out.phi_edges.end()))
-    throw InputError(path + ": /bins/phi_edges must hold at least two increasing edges");
+  if (nb < 1 || std::adjacent_find(out.phi_edges.begin(), out.phi_edges.end(), std::greater_equal<>()) !=
+                    out.phi_edges.end())
+    throw InputError(path + ": dataset '/bins/phi_edges' must hold at least two increasing edges");
 
   // /runs and /snapshots
-  need("/runs/mean_solids_fraction");
   out.run_paths =
       f.has_attr("/runs", "paths") ? f.attr_strings("/runs", "paths") : std::vector<std::string>{};
-  const std::size_t n_runs = f.dims("/runs/mean_solids_fraction").at(0);
+  const std::size_t n_runs =
+      schema::read_doubles(f, "/runs/mean_solids_fraction", {kAnyExtent}, Finite::Everywhere).size();
   if (out.run_paths.size() != n_runs) out.run_paths.resize(n_runs, path);
-  need("/snapshots/run_index");
-  need("/snapshots/block");
-  out.snapshot_run = f.read_int("/snapshots/run_index");
-  out.snapshot_block = f.read_int("/snapshots/block");
+  const std::string per_run = "one row per run, the length of /runs/mean_solids_fraction";
+  const std::vector<std::int64_t> run_snapshots = schema::read_ints(f, "/runs/snapshot_count", {n_runs}, per_run);
+  out.snapshot_run = schema::read_ints(f, "/snapshots/run_index", {kAnyExtent});
   const std::size_t ns = out.snapshot_run.size();
-  if (out.snapshot_block.size() != ns)
-    throw InputError(path + ": /snapshots/block and /snapshots/run_index differ in length");
+  const std::string per_snapshot = "one row per snapshot, the length of /snapshots/run_index";
+  out.snapshot_block = schema::read_ints(f, "/snapshots/block", {ns}, per_snapshot);
+  std::int64_t listed = 0;
+  for (std::int64_t c : run_snapshots) listed += c;
+  if (listed != static_cast<std::int64_t>(ns))
+    throw InputError(path + ": dataset '/runs/snapshot_count' sums to " + std::to_string(listed) +
+                     " snapshots, expected " + std::to_string(ns) + " (the rows of /snapshots/run_index)");
   for (std::int64_t r : out.snapshot_run)
     if (r < 0 || static_cast<std::size_t>(r) >= n_runs)
       throw InputError(path + ": /snapshots/run_index holds " + std::to_string(r) + ", outside [0, " +
@@ -87,39 +91,49 @@ FilteredFile read_filtered_file(const std::string& path) {
     WidthSeries w;
     w.group = g;
     need_attr(g, "F");
-    w.F = f.attr_double(g, "F");
-    if (f.has_attr(g, "width_m")) w.width_m = f.attr_double(g, "width_m");
-    if (f.has_attr(g, "width_over_cell")) w.width_over_cell = f.attr_double(g, "width_over_cell");
+    w.F = schema::finite_attr(f, g, "F");
+    if (f.has_attr(g, "width_m")) w.width_m = schema::finite_attr(f, g, "width_m");
+    if (f.has_attr(g, "width_over_cell")) w.width_over_cell = schema::finite_attr(f, g, "width_over_cell");
     w.whole_box = g == "/whole_box";
     w.grid = gi >= n_box_groups;
     if (w.grid) {
       for (const char* key : {"cells_across", "cell_size_over_dp"}) need_attr(g, key);
       w.cells_across = f.attr_int(g, "cells_across");
-      w.cell_size_over_dp = f.attr_double(g, "cell_size_over_dp");
+      w.cell_size_over_dp = schema::finite_attr(f, g, "cell_size_over_dp");
     }
     if (!(w.F > 0)) throw InputError(path + ": " + g + " attribute F = " + number(w.F) + ": must be > 0");
-    for (const char* d : {"H", "H_low", "H_high", "count", "phi_mean"}) need(g + "/" + d);
-    w.H = f.read_double(g + "/H");
-    w.H_low = f.read_double(g + "/H_low");
-    w.H_high = f.read_double(g + "/H_high");
-    w.phi_mean = f.read_double(g + "/phi_mean");
-    w.count = f.read_int(g + "/count");
-    for (std::size_t size : {w.H.size(), w.H_low.size(), w.H_high.size(), w.phi_mean.size(), w.count.size()})
-      if (size != nb)
-        throw InputError(path + ": " + g + ": per-bin datasets must have n_bins = " + std::to_string(nb) +
-                         " entries (len(/bins/phi_edges) - 1)");
+    // per-bin datasets: n_bins long; the float ones NaN only in empty bins (H_low, H_high: also where the
+    // bootstrap could not form an interval)
+    const std::string per_bin = "n_bins = len(/bins/phi_edges) - 1 = " + std::to_string(nb);
+    w.count = schema::read_ints(f, g + "/count", {nb}, per_bin);
+    for (std::size_t b = 0; b < nb; ++b)
+      if (w.count[b] < 0)
+        throw InputError(path + ": dataset '" + g + "/count' holds " + std::to_string(w.count[b]) + " in bin " +
+                         std::to_string(b) + ", expected counts >= 0");
+    auto per_bin_values = [&](const char* name, bool finite_where_counted) {
+      std::vector<double> v = schema::read_doubles(f, g + "/" + name, {nb}, Finite::Not, per_bin);
+      if (finite_where_counted) schema::require_finite_where_counted(path, g + "/" + name, v, w.count);
+      return v;
+    };
+    w.H = per_bin_values("H", true);
+    w.H_low = per_bin_values("H_low", false);
+    w.H_high = per_bin_values("H_high", false);
+    w.phi_mean = per_bin_values("phi_mean", true);
+    for (const char* name : {"slip", "drag"})
+      if (f.exists(g + "/" + name)) per_bin_values(name, true);
     if (out.has_per_snapshot) {
-      for (const char* d : {"numerator", "micro", "count"}) {
-        const std::string ds = g + "/per_snapshot/" + d;
-        need(ds);
-        const auto dims = f.dims(ds);
-        if (dims.size() != 2 || dims[0] != ns || dims[1] != nb)
-          throw InputError(path + ": " + ds + " must have shape (n_snapshots, n_bins) = (" +
-                           std::to_string(ns) + ", " + std::to_string(nb) + ")");
+      const std::string shape = "(n_snapshots, n_bins) = (" + std::to_string(ns) + ", " + std::to_string(nb) + ")";
+      w.numerator = schema::read_doubles(f, g + "/per_snapshot/numerator", {ns, nb}, Finite::Everywhere, shape);
+      w.micro = schema::read_doubles(f, g + "/per_snapshot/micro", {ns, nb}, Finite::Everywhere, shape);
+      w.snapshot_count = schema::read_ints(f, g + "/per_snapshot/count", {ns, nb}, shape);
+      for (std::size_t b = 0; b < nb; ++b) {
+        std::int64_t sum = 0;
+        for (std::size_t k = 0; k < ns; ++k) sum += w.snapshot_count[k * nb + b];
+        if (sum != w.count[b])
+          throw InputError(path + ": dataset '" + g + "/per_snapshot/count' sums to " + std::to_string(sum) +
+                           " samples in bin " + std::to_string(b) + ", expected " + std::to_string(w.count[b]) +
+                           " (" + g + "/count)");
       }
-      w.numerator = f.read_double(g + "/per_snapshot/numerator");
-      w.micro = f.read_double(g + "/per_snapshot/micro");
-      w.snapshot_count = f.read_int(g + "/per_snapshot/count");
     }
     (w.grid ? out.grids : out.widths).push_back(std::move(w));
   }
@@ -128,9 +142,8 @@ FilteredFile read_filtered_file(const std::string& path) {
   return out;
 }
 
-std::vector<FilteredFile> select_operator(const std::vector<FilteredFile>& files, const std::string& op) {
-  if (op == "box") return files;
-  if (op != "grid") throw InputError("cgd-fit: --operator " + op + ": allowed \"box\" or \"grid\"");
+std::vector<FilteredFile> select_operator(const std::vector<FilteredFile>& files, CalibrationOperator op) {
+  if (op == CalibrationOperator::Box) return files;
   std::vector<FilteredFile> out = files;
   for (FilteredFile& f : out) {
     if (f.grids.empty())

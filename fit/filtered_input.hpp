@@ -6,6 +6,7 @@
 #include <string>
 #include <vector>
 
+#include "core/filtered_drag.hpp"  // CalibrationOperator
 #include "core/physical_system.hpp"
 #include "core/scene.hpp"
 
@@ -48,11 +49,11 @@ struct FilteredFile {
 /// cgd_format = "filtered", of another version, or lacks (or has inconsistent) required datasets.
 FilteredFile read_filtered_file(const std::string& path);
 
-/// The files as the fitter sees them for an operator: "box" leaves them as read; "grid" puts each file's
+/// The files as the fitter sees them for an operator: Box leaves them as read; TscGrid puts each file's
 /// coarse grids (/grids/<N>, then /whole_box as a check) in place of its box widths, so that every step
 /// of the fit (bins, splines, bootstrap, cross-validation) runs on H_grid with F = L_char / cell size.
 /// InputError naming the files when a file has no /grids (filter it with cgd-filter --grids).
-std::vector<FilteredFile> select_operator(const std::vector<FilteredFile>& files, const std::string& op);
+std::vector<FilteredFile> select_operator(const std::vector<FilteredFile>& files, CalibrationOperator op);
 
 /// InputError naming both files and the key unless every file has the same physical system
 /// (compare_systems: d_p, densities, viscosity, |g|, u_t, L_char to 1e-6 relative, micro_drag exactly)

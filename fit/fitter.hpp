@@ -50,9 +50,9 @@ struct FitOptions {
   bool cross_validate = true;        // leave-one-run-out
   double width_exponent = 1.0;       // n of 1/(1 + a F^n) (1: Radl & Sundaresan 2014)
   bool fit_width_exponent = false;   // step 0: fit n instead
-  // "box": the box widths (/width_<k>); "grid": the coarse grids' H_grid (/grids/<N>, Delta = the grid's
-  // cell size; select_operator) — the model file's operator is then "tsc-grid"
-  std::string calibration_operator = "box";
+  // Box: the box widths (/width_<k>); TscGrid (--operator grid): the coarse grids' H_grid (/grids/<N>,
+  // Delta = the grid's cell size; select_operator) — the model file's operator is then "tsc-grid"
+  CalibrationOperator calibration_operator = CalibrationOperator::Box;
 };
 
 /// The per-bin estimate of step 1.

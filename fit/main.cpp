@@ -123,13 +123,16 @@ int main(int argc, char** argv) {
       return cgd::kExitOk;
     }
 
-    if (op != "box" && op != "grid")
-      throw cgd::InputError("cgd-fit: --operator " + op + ": allowed \"box\" or \"grid\"");
+    const auto calibration = cgd::parse_calibration_operator(op, &cgd::CalibrationOperatorNames::option);
+    if (!calibration)
+      throw cgd::InputError("cgd-fit: --operator " + op + ": allowed " +
+                            cgd::calibration_operator_choices(&cgd::CalibrationOperatorNames::option));
     if (app.count("--grid-table") && grid_table < 1)
       throw cgd::InputError("cgd-fit: --grid-table " + std::to_string(grid_table) + ": allowed a number of cells across >= 1");
-    options.calibration_operator = op;
+    options.calibration_operator = *calibration;
     // a grid equal to the resolved one is the identity (H_grid = 0 by construction): a check, not data
-    if (op == "grid" && !app.count("--min-width-over-cell")) options.min_width_over_cell = 1.01;
+    if (*calibration == cgd::CalibrationOperator::TscGrid && !app.count("--min-width-over-cell"))
+      options.min_width_over_cell = 1.01;
     // every input read and checked before anything is written
     std::vector<cgd::fit::FilteredFile> files;
     for (const std::string& path : inputs) files.push_back(cgd::fit::read_filtered_file(path));
@@ -142,7 +145,7 @@ int main(int argc, char** argv) {
       if (!quiet) std::cout << report << "wrote " << output << "\n";
       return cgd::kExitOk;
     }
-    files = cgd::fit::select_operator(files, op);
+    files = cgd::fit::select_operator(files, *calibration);
     const cgd::Scene scene =
         cgd::load_scene_from_string(files.front().scene_toml, files.front().path + " (scene)");
     const cgd::fit::FitResult result = cgd::fit::fit_filtered_drag(files, options, nullptr);

@@ -57,7 +57,7 @@ void write_model_file(const std::string& path, const FitResult& R, const std::ve
                       const FitOptions& o, const Scene& scene) {
   const DragModel& M = R.model;
   h5::write_atomically(path, MPI_COMM_SELF, [&](h5::File& f) {
-    schema::write_common(f, "drag_model", scene);
+    schema::write_common(f, schema::kDragModel, scene);
     f.set_attr(
         "/", "model_form",
         std::string("beta_bar/beta_micro = c_corr(alpha) [1 - h(phi)/(1 + a(phi) F^n)], F = l_char_m / Delta, "
@@ -70,8 +70,8 @@ void write_model_file(const std::string& path, const FitResult& R, const std::ve
     }
     // the calibration: the operator the H data came from and the Delta fitted
     {
-      const bool grid = o.calibration_operator == "grid";
-      f.set_attr("/", "operator", std::string(grid ? "tsc-grid" : "box"));
+      const bool grid = o.calibration_operator == CalibrationOperator::TscGrid;
+      f.set_attr("/", "operator", std::string(names_of(o.calibration_operator).model_file));
       if (grid) f.set_attr("/", "kernel", std::string("tsc"));
       f.set_attr("/", "curves", std::string("splines"));
       std::vector<double> delta;
@@ -292,13 +292,13 @@ std::string write_grid_table_model(const std::string& path, const std::vector<Fi
   log_a.coefficients.assign(H.size(), -700.0);  // a = exp(-700) ~ 1e-304: 0 for any evaluator of the file
   const double h_max = 0.99;
   h5::write_atomically(path, MPI_COMM_SELF, [&](h5::File& f) {
-    schema::write_common(f, "drag_model", scene);
+    schema::write_common(f, schema::kDragModel, scene);
     f.set_attr("/", "model_form",
                std::string("beta_bar/beta_micro = c_corr(alpha) [1 - H_grid(phi)], H_grid the a-priori filtered drag "
                            "correction of one coarse grid (curves = table): piecewise linear in phi through the table, "
                            "constant outside it, clamped to [-1, h_max]; no width dependence (a = 0)"));
     f.set_attr("/", "curves", std::string("table"));
-    f.set_attr("/", "operator", std::string("tsc-grid"));
+    f.set_attr("/", "operator", std::string(names_of(CalibrationOperator::TscGrid).model_file));
     f.set_attr("/", "kernel", std::string("tsc"));
     f.set_attr("/", "table_cells_across", static_cast<std::int64_t>(cells_across));
     f.set_attr("/", "calibrated_delta_m", std::vector<double>{delta});
@@ -342,7 +342,7 @@ std::string fit_report(const FitResult& R, const std::vector<FilteredFile>& file
   const bool n1 = R.model.width_exponent == 1.0;
   const std::string form = n1 ? "1/(1 + aF)" : "1/(1 + aF^n)";
   out << "cgd-fit: H(F, phi) = h(phi)/(1 + a(phi) F" << (n1 ? "" : "^n") << "), F = L_char/Delta";
-  out << (o.calibration_operator == "grid" ? " (operator tsc-grid: H_grid of the coarse grids, Delta = cell size)"
+  out << (o.calibration_operator == CalibrationOperator::TscGrid ? " (operator tsc-grid: H_grid of the coarse grids, Delta = cell size)"
                                            : " (operator box: box filters of width Delta)");
   if (!n1 || o.fit_width_exponent) out << ", n = " << format("%.3f", R.model.width_exponent);
   out << "; " << files.size()

@@ -14,6 +14,7 @@
 
 #include "core/error.hpp"
 #include "core/h5.hpp"
+#include "core/schema/coarse_summary.hpp"
 
 namespace cgd::fit {
 
@@ -95,28 +96,30 @@ double quantile(std::vector<double> v, double q) {
 
 ParcelRun read_parcel_run(const std::string& run_dir, double u_t) {
   const std::string path = (std::filesystem::path(run_dir) / "summary.h5").string();
-  h5::File f = h5::File::open_read(path, MPI_COMM_SELF);
-  if (!f.has_attr("/", "cgd_format") || f.attr_string("/", "cgd_format") != "coarse_summary")
-    throw InputError(path + ": not a cgd-coarse summary (cgd_format 'coarse_summary' expected)");
-  const std::string drag = f.attr_string("/", "drag");
-  if (drag != "model" && drag != "model-raw")
-    throw InputError(path + ": the run used drag '" + f.attr_string("/", "drag") +
+  const schema::CoarseSummary s = schema::read_coarse_summary(path);
+  if (s.drag != "model" && s.drag != "model-raw")
+    throw InputError(path + ": the run used drag '" + s.drag +
                      "'; the parcel fit needs runs with the grid model (drag = \"model\")");
   // alpha = 1 runs are the same with c_corr on or off (c_corr(1) = 1)
-  const bool primary = std::abs(f.attr_double("/", "parcel_size") - 1.0) < 1e-12;
-  if (!primary && (!f.has_attr("/params", "parcel_correction") || f.attr_int("/params", "parcel_correction") != 0))
+  const bool primary = std::abs(s.parcel_size - 1.0) < 1e-12;
+  if (!primary && s.parcel_correction.value_or(true))
     throw InputError(path + ": the run applied c_corr; the parcel fit needs runs with fluid.parcel_correction = false");
-  if (!f.has_attr("/", "reference_slip_over_ut"))
+  if (!s.reference)
     throw InputError(path + ": the run has no reference (run cgd-coarse with --reference RESOLVED_RUN)");
+  // the fit weighs each run by its errors
+  if (!(s.slip_stderr > 0) || !(s.reference->slip_stderr > 0) || !(s.solids_fraction > 0))
+    throw InputError(path + ": slip_stderr = " + std::to_string(s.slip_stderr) + ", reference_slip_stderr = " +
+                     std::to_string(s.reference->slip_stderr) + ", /params solids_fraction = " +
+                     std::to_string(s.solids_fraction) + ": the parcel fit needs all three positive");
   ParcelRun r;
   r.run_dir = run_dir;
-  r.solids_fraction = f.attr_double("/params", "solids_fraction");
-  r.parcel_size = f.attr_double("/", "parcel_size");
-  r.slip_m_s = f.attr_double("/", "slip_over_ut") * u_t;
-  r.slip_se_m_s = f.attr_double("/", "slip_stderr") * u_t;
-  r.reference_m_s = f.attr_double("/", "reference_slip_over_ut") * u_t;
-  r.reference_se_m_s = f.attr_double("/", "reference_slip_stderr") * u_t;
-  r.seed = f.has_attr("/params", "seed") ? static_cast<int>(f.attr_int("/params", "seed")) : 1;
+  r.solids_fraction = s.solids_fraction;
+  r.parcel_size = s.parcel_size;
+  r.slip_m_s = s.slip_over_ut * u_t;
+  r.slip_se_m_s = s.slip_stderr * u_t;
+  r.reference_m_s = s.reference->slip_over_ut * u_t;
+  r.reference_se_m_s = s.reference->slip_stderr * u_t;
+  r.seed = static_cast<int>(s.seed);
   return r;
 }
 

@@ -123,6 +123,14 @@ checkpoint::FluidRows CoupledStep::checkpoint_rows() {
 
 void CoupledStep::restore(const checkpoint::Reader& reader) {
   fluid::FluidState& st = fluid_->state();
+  const auto& n = grid_.cells();
+  const std::int64_t cells = static_cast<std::int64_t>(n[0]) * n[1] * n[2];
+  if (!reader.has_fluid() || reader.fluid_cells() != cells)  // the same verdict on every rank: metadata
+    throw InputError(reader.path() + ": " +
+                     (reader.has_fluid() ? "the fluid fields hold " + std::to_string(reader.fluid_cells()) + " cells"
+                                         : std::string("no group '/fluid'")) +
+                     ", expected the scene's grid of " + std::to_string(n[0]) + " x " + std::to_string(n[1]) + " x " +
+                     std::to_string(n[2]) + " = " + std::to_string(cells) + " cells");
   // this rank's planes start at row j0 of the global (y, z, x) order
   const std::int64_t first = static_cast<std::int64_t>(grid_.j0()) * static_cast<std::int64_t>(grid_.plane());
   const auto fields = restart_fields();

@@ -762,12 +762,9 @@ Scene restart_scene(const Scene& scene, const std::string& output_dir, MPI_Comm 
   if (!exists)
     throw InputError(path.string() + ": no checkpoint to restart from (--restart needs a run directory written by " +
                      "an earlier run of this scene)");
-  std::string stored, name;
-  {
-    h5::File file = h5::File::open_read(path.string(), comm);
-    stored = file.attr_string("/", "scene");
-    name = file.attr_string("/params", "scene_name");
-  }
+  const checkpoint::Header header = checkpoint::read_header(path.string(), comm);
+  const std::string& stored = header.scene_toml;
+  const std::string& name = header.scene_name;
   const std::vector<std::string> diff = restart_differences(stored, scene.effective_toml);
   if (!diff.empty()) {
     std::string message = scene.source_path + ": the scene differs from the one the run in " + output_dir +

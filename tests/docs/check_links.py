@@ -95,7 +95,9 @@ def check_links(root, pages):
 def check_formats(root):
     """Every cgd_format the code writes has a docs/schema-*.md page saying cgd_format = "FORMAT"."""
     written = {}
-    patterns = [re.compile(r"write_common\(\s*\w+\s*,\s*\"(\w+)\""),
+    # the formats' rows (core/schema/check.hpp: `inline constexpr Format kSnapshot{"snapshot", ...}`) and the
+    # Python writers
+    patterns = [re.compile(r"constexpr\s+Format\s+\w+\s*\{\s*\"(\w+)\""),
                 re.compile(r"attrs\[\s*[\"']cgd_format[\"']\s*\]\s*=\s*[\"'](\w+)[\"']")]
     for folder, dirs, files in os.walk(root):
         dirs[:] = [d for d in dirs if not d.startswith(".") and d not in ("build", "out", "tests")]

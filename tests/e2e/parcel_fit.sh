@@ -22,24 +22,13 @@ ok() { echo "ok   $*"; }
 
 # runs NAME PHI "ALPHA:SEED:SLIP ..." : synthetic summaries under $tmp/NAME/ (slips in u_t, errors 0.005)
 runs() {
-  "$py" - "$tmp/$1" "$2" "$3" <<'PY'
-import os, sys, h5py
-base, phi, spec = sys.argv[1], float(sys.argv[2]), sys.argv[3].split()
-for item in spec:
-    alpha, seed, slip = item.split(":")
-    alpha, seed, slip = float(alpha), int(seed), float(slip)
-    label = "model" if alpha == 1 else "modelraw"
-    d = os.path.join(base, f"phi{phi}_c4_a{alpha:g}_{label}_s{seed}")
-    os.makedirs(d)
-    with h5py.File(os.path.join(d, "summary.h5"), "w") as f:
-        p = f.create_group("params").attrs
-        p["solids_fraction"], p["seed"], p["parcel_correction"] = phi, seed, int(alpha == 1)
-        a = f.attrs
-        a["cgd_format"], a["drag"] = "coarse_summary", ("model" if alpha == 1 else "model-raw")
-        a["parcel_size"], a["slip_over_ut"], a["slip_stderr"] = alpha, slip, 0.005
-        a["reference_slip_over_ut"], a["reference_slip_stderr"] = 1.0, 0.01
-    print(d)
-PY
+  local item alpha seed slip label d
+  for item in $3; do
+    IFS=: read -r alpha seed slip <<<"$item"
+    if [ "$alpha" = 1 ]; then label=model; else label=modelraw; fi
+    d=$tmp/$1/phi$2_c4_a${alpha}_${label}_s$seed
+    "$py" "$source_dir/tests/fit/synthetic_summary.py" "$d" "$2" "$alpha" "$seed" "$slip" && echo "$d"
+  done
 }
 attrs() {  # FILE: the /c_corr attributes as python literals
   "$py" -c 'import sys, h5py; a = h5py.File(sys.argv[1], "r")["c_corr"].attrs; print({k: (a[k].decode() if isinstance(a[k], bytes) else a[k]) for k in ("a", "k", "k_fit", "applied", "p_value", "decision")})' "$1"

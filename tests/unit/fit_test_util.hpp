@@ -137,6 +137,9 @@ inline void write_filtered(const std::string& path, const FilteredFile& f, const
   const std::uint64_t nb = f.bins(), ns = f.snapshots(), nr = f.runs();
   h.set_attr("/runs", "paths", f.run_paths);
   h.write_replicated("/runs/mean_solids_fraction", std::vector<double>(nr, 0.1), {nr});
+  std::vector<std::int64_t> run_snapshots(nr, 0);
+  for (std::int64_t r : f.snapshot_run) run_snapshots[static_cast<std::size_t>(r)] += 1;
+  h.write_replicated("/runs/snapshot_count", run_snapshots, {nr});
   h.write_replicated("/snapshots/run_index", f.snapshot_run, {ns});
   h.write_replicated("/snapshots/block", f.snapshot_block, {ns});
   h.write_replicated("/bins/phi_edges", f.phi_edges, {nb + 1});

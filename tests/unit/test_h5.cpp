@@ -214,7 +214,7 @@ TEST_F(H5Test, MissingDatasetOrAttributeThrowsInputErrorNamingFileAndObject) {
   msg = input_error_message([&] { f.attr_string("/params", "scene"); });
   EXPECT_NE(msg.find("/params"), std::string::npos) << msg;
   msg = input_error_message([&] { f.attr_double("/", "cgd_format"); });  // a string is not a number
-  EXPECT_NE(msg.find("not numeric"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("is a string, expected a number"), std::string::npos) << msg;
   msg = input_error_message([&] { f.read_rows_double("/particles/diameter", 1, 5); });
   EXPECT_NE(msg.find("/particles/diameter"), std::string::npos) << msg;
 }
@@ -239,6 +239,46 @@ TEST_F(H5Test, AtomicWriteLeavesOnlyTheCompleteFile) {
   EXPECT_TRUE(fs::exists(final_path));
   EXPECT_FALSE(fs::exists(final_path + ".tmp"));
   EXPECT_EQ(File::open_read(final_path, MPI_COMM_WORLD).attr_int("/", "step"), 7);
+}
+
+// The checksum seal (h5.hpp, the checkpoints' format): written by write_atomically with Seal::Yes, checked
+// by open_read before HDF5 parses the file, so an overwritten byte anywhere after the user block, or a file
+// cut short, is an InputError.
+TEST_F(H5Test, SealedFileIsRefusedOnceAByteChangesOrItIsCutShort) {
+  const std::string final_path = path("sealed.h5");
+  cgd::h5::write_atomically(final_path, MPI_COMM_WORLD, [&](File& f) {
+    const std::vector<double> x{1, 2, 3, 4};
+    f.write_replicated("/data", x, {4});
+  }, cgd::h5::Seal::Yes);
+  EXPECT_TRUE(File::open_read(final_path, MPI_COMM_WORLD).sealed());
+  std::string problem;
+  EXPECT_EQ(cgd::h5::check_seal(final_path, &problem), cgd::h5::SealState::Valid) << problem;
+  const auto size = fs::file_size(final_path);
+  const std::string damaged = path("damaged.h5"), short_file = path("short.h5");
+  fs::copy_file(final_path, damaged);
+  {
+    std::fstream io(damaged, std::ios::in | std::ios::out | std::ios::binary);
+    io.seekp(static_cast<std::streamoff>(size - 3));
+    io.put('\x7f');
+  }
+  fs::copy_file(final_path, short_file);
+  fs::resize_file(short_file, size - 100);
+  for (const auto& [file, expected] : {std::pair<std::string, std::string>{damaged, "do not match the checksum"},
+                                       {short_file, "cut short"}}) {
+    try {
+      File::open_read(file, MPI_COMM_WORLD);
+      ADD_FAILURE() << file << ": no InputError";
+    } catch (const cgd::InputError& e) {
+      const std::string msg = e.what();
+      EXPECT_NE(msg.find(file + ": damaged: "), std::string::npos) << msg;
+      EXPECT_NE(msg.find(expected), std::string::npos) << msg;
+    }
+  }
+  // a file without the user block (every format but the checkpoint, or one written by another tool) is
+  // read as before, unsealed
+  cgd::h5::write_atomically(path("plain.h5"), MPI_COMM_WORLD, [&](File&) {});
+  EXPECT_FALSE(File::open_read(path("plain.h5"), MPI_COMM_WORLD).sealed());
+  EXPECT_EQ(cgd::h5::check_seal(path("plain.h5"), &problem), cgd::h5::SealState::None);
 }
 
 TEST_F(H5Test, AtomicWriteWithAFailingBodyLeavesNeitherFinalNorTmp) {

@@ -1,0 +1,83 @@
+#!/usr/bin/python3
+"""Every file name the Python tools read is in the schema (issue 30): each string a tool in tools/ looks up in an
+h5py file or attribute set -- f["particles/position"], a.get("width_exponent"), "bands" in f -- has each of its
+path components written as `name` on a docs/schema-*.md page, the schema the tools and the C++ readers share.
+
+What counts as a lookup in an h5py object: a subscript, .get() or `in` test on a variable of the names the tools
+use for files, groups and attribute sets (f, g, h, s, a, p, b, t, c, d, ps, grp, sn, runs) or on `.attrs`,
+with a constant string, unless the same file also stores that key into a dict of its own (a subscript
+assignment or a dict literal: the tools' in-memory rows). Run by CTest (schema_tool_names).
+"""
+import ast
+import os
+import re
+import sys
+
+ROOT = sys.argv[1] if len(sys.argv) > 1 else os.path.abspath(os.path.join(os.path.dirname(__file__), "..", ".."))
+H5_VARIABLES = {"f", "g", "h", "s", "a", "p", "b", "t", "c", "d", "ps", "grp", "sn", "runs", "attrs"}
+
+
+def documented_names():
+    docs = os.path.join(ROOT, "docs")
+    text = "".join(open(os.path.join(docs, n), encoding="utf-8").read()
+                   for n in sorted(os.listdir(docs)) if n.startswith("schema-") and n.endswith(".md"))
+    names = set()
+    for quoted in re.findall(r"`/?([A-Za-z_][A-Za-z0-9_/<>]*)", text):
+        names.update(quoted.split("/"))
+    return names
+
+
+def lookups(path):
+    tree = ast.parse(open(path, encoding="utf-8").read(), path)
+    own = set()  # keys of the tool's own dicts
+    for node in ast.walk(tree):
+        if isinstance(node, ast.Dict):
+            own.update(k.value for k in node.keys if isinstance(k, ast.Constant) and isinstance(k.value, str))
+        elif isinstance(node, ast.Subscript) and isinstance(node.ctx, ast.Store) and \
+                isinstance(node.slice, ast.Constant) and isinstance(node.slice.value, str):
+            own.add(node.slice.value)
+    found = []
+    for node in ast.walk(tree):
+        key = base = None
+        if isinstance(node, ast.Subscript) and isinstance(node.slice, ast.Constant) and isinstance(node.slice.value, str):
+            key, base = node.slice.value, node.value
+        elif isinstance(node, ast.Call) and isinstance(node.func, ast.Attribute) and node.func.attr == "get" and \
+                node.args and isinstance(node.args[0], ast.Constant) and isinstance(node.args[0].value, str):
+            key, base = node.args[0].value, node.func.value
+        elif isinstance(node, ast.Compare) and isinstance(node.left, ast.Constant) and \
+                isinstance(node.left.value, str) and len(node.ops) == 1 and isinstance(node.ops[0], (ast.In, ast.NotIn)):
+            key, base = node.left.value, node.comparators[0]
+        if key is None or key in own:
+            continue
+        root = base
+        while isinstance(root, (ast.Subscript, ast.Attribute, ast.Call)):
+            root = root.func if isinstance(root, ast.Call) else root.value
+        on_attrs = isinstance(base, ast.Attribute) and base.attr == "attrs"
+        if on_attrs or (isinstance(root, ast.Name) and root.id in H5_VARIABLES):
+            found.append((node.lineno, key))
+    return found
+
+
+def main():
+    names = documented_names()
+    tools = os.path.join(ROOT, "tools")
+    files = [os.path.join(tools, n) for n in sorted(os.listdir(tools)) if n.endswith(".py") or n == "cgd-show"]
+    problems, count = [], 0
+    for path in files:
+        for line, key in lookups(path):
+            count += 1
+            missing = [part for part in key.split("/") if part and part not in names]
+            if missing:
+                problems.append(f"{os.path.relpath(path, ROOT)}:{line}: reads '{key}', and no docs/schema-*.md page "
+                                f"names {', '.join(missing)}")
+    for p in problems:
+        print(p)
+    print(f"tool_names: {count} lookups in {len(files)} tools: {'OK' if not problems else str(len(problems)) + ' not in the schema'}")
+    if count < 100:
+        print("FAIL: found fewer than 100 lookups: the patterns of this test are out of date")
+        return 1
+    return 1 if problems else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
