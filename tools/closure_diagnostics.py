@@ -79,25 +79,18 @@ def overlap_matrix(n_fine, h_fine, origin, n_coarse, h_coarse):
     return w
 
 
-def snapshot_time(path):
-    """The snapshot's time (s), read alone: the window is chosen before the arrays are read."""
-    try:
-        with h5py.File(path, "r") as f:
-            if "time" not in f.attrs or "params" not in f or "t_ref_s" not in f["params"].attrs:
-                fail(f"{path}: no time attribute or /params@t_ref_s: not a cgd snapshot")
-            return float(f.attrs["time"]), float(f["params"].attrs["t_ref_s"])
-    except OSError as e:
-        fail(f"{path}: not a readable HDF5 file ({e})")
-
-
-def snapshot_cells(path, n_cells):
+def snapshot_cells(path, n_cells, from_tref):
     """Per coarse cell of one snapshot: solids volume, particle volume x velocity (y), fluid <eps> and <eps u_y>
-    volumes; and the run's constants."""
+    volumes; and the run's constants. None for a snapshot before from_tref t_ref (its arrays are not read)."""
     try:
         f = h5py.File(path, "r")
     except OSError as e:
         fail(f"{path}: not a readable HDF5 file ({e})")
     with f:
+        if "time" not in f.attrs or "params" not in f or "t_ref_s" not in f["params"].attrs:
+            fail(f"{path}: no time attribute or /params@t_ref_s: not a cgd snapshot")
+        if not float(f.attrs["time"]) >= from_tref * float(f["params"].attrs["t_ref_s"]) * (1 - 1e-9):
+            return None
         if f.attrs.get("cgd_format") not in ("snapshot", b"snapshot"):
             fail(f"{path}: cgd_format is {f.attrs.get('cgd_format')!r}, expected 'snapshot'")
         p = need(f, path, "params").attrs
@@ -126,7 +119,6 @@ def snapshot_cells(path, n_cells):
                         ("fluid/eps_velocity", eu)):
             if not np.all(np.isfinite(a)):
                 fail(f"{path}: /{name} holds non-finite values")
-        t = float(f.attrs.get("time", math.nan))
         alpha = float(p["parcel_size"])
         vol = alpha ** 3 * float(p["particle_volume_m3"])
         consts = dict(box=box, u_t=float(p["u_t_m_s"]), t_ref=float(p["t_ref_s"]), rho_p=float(p["density_kg_m3"]),
@@ -155,30 +147,28 @@ def snapshot_cells(path, n_cells):
     eu_c = np.einsum("zk,yj,xi,kji->zyx", wz, wy, wx, eu).reshape(-1)
     cell_volume = float(np.prod(hs))
     fine_volume = float(np.prod(spacing))
-    return dict(t=t, flat=flat, solids=solids, momentum=momentum, e=e_c, eu=eu_c, cell_volume=cell_volume,
+    return dict(flat=flat, solids=solids, momentum=momentum, e=e_c, eu=eu_c, cell_volume=cell_volume,
                 n=n, v_mean=float(v[:, 1].mean()), dpdy_mean=float(dpdy.mean()),
                 u_domain=float(eu.sum() / eps.sum()), phi_mean=n * vol / float(np.prod(box)),
                 fine_volume=fine_volume, **consts)
 
 
-def run_snapshots(run, from_tref):
+def run_snapshots(run):
     files = sorted(glob.glob(os.path.join(run, "snapshots", "*.h5")))
     if not files:
         fail(f"{run}: no snapshots/*.h5")
-    return files, from_tref
+    return files
 
 
 def analyse(runs, n_cells, from_tref, bin_width):
     """Pooled figures of one or more runs (their window's snapshots)."""
     phi_all, slip_all, rows = [], [], []
     for run in runs:
-        files, _ = run_snapshots(run, from_tref)
         used = 0
-        for path in files:
-            t, t_ref = snapshot_time(path)
-            if not t >= from_tref * t_ref * (1 - 1e-9):
+        for path in run_snapshots(run):
+            snap = snapshot_cells(path, n_cells, from_tref)
+            if snap is None:
                 continue
-            snap = snapshot_cells(path, n_cells)
             used += 1
             occupied = snap["solids"] > 0
             phi = snap["solids"] / snap["cell_volume"]
