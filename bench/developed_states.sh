@@ -22,6 +22,11 @@ ranks=${4:-2}
 for phi in "${phis[@]}"; do
   [[ $phi =~ ^0?[.][0-9]+$ ]] || { echo "developed_states.sh: solids fraction '$phi' is not in (0, 1)" >&2; exit 2; }
 done
+# the half profile's scene and settings, from Makefile.pipeline itself (its end time is replaced: overrides apply
+# in order, the last one given wins)
+base=$(make -s -C "$repo" -f Makefile.pipeline PROFILE=half print-BASE_SCENE) &&
+  read -r -a profile_set <<< "$(make -s -C "$repo" -f Makefile.pipeline PROFILE=half print-GENERATE_SET)" ||
+  { echo "developed_states.sh: could not read PROFILE=half from Makefile.pipeline" >&2; exit 2; }
 export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1
 launch=()
 [ "$ranks" -gt 1 ] && launch=(mpirun --allow-run-as-root --oversubscribe -np "$ranks")
@@ -32,8 +37,9 @@ for phi in "${phis[@]}"; do
   if [ -e "$dir/checkpoint.h5" ]; then
     args=(--restart "${args[@]}")
   else
-    args=("$repo/data/scenes/pipeline_demo.toml" --set "particles.solids_fraction=$phi"
-          --set "domain.size_dp=[53,213,53]" --set contact.gamma_star=2e-3 "${args[@]}")
+    sets=()
+    for kv in "${profile_set[@]}"; do sets+=(--set "$kv"); done
+    args=("$repo/$base" --set "particles.solids_fraction=$phi" "${sets[@]}" "${args[@]}")
   fi
   echo "developed_states.sh: phi = $phi to $tref t_ref -> $dir"
   "${launch[@]}" "$gen" "${args[@]}" || { echo "developed_states.sh: the run at phi = $phi failed" >&2; status=1; }
