@@ -283,7 +283,7 @@ int main(int argc, char** argv) {
         }
     (void)L;
     dem.set_particles(std::move(ids), std::move(x), std::move(v), std::move(w));
-    dem.restore(std::move(store), 0.0, true, reader.state().step, -1);  // -1: sort by cell at the first rebuild
+    dem.restore(std::move(store), {}, true, reader.state().step, -1);  // -1: sort by cell at the first rebuild
 
     // fluid: the small box's fields (global y, z, x order), tiled over this rank's rows
     {

@@ -27,7 +27,6 @@ void write(const std::string& path, MPI_Comm comm, const Scene& scene, const Run
     schema::write_common(file, schema::kCheckpoint, scene);
     file.set_attr("/", "step", state.step);
     file.set_attr("/", "time", state.time_s);
-    file.set_attr("/", "displacement_bound", state.displacement_bound_m);
     file.set_attr("/", "rebuild_due", static_cast<std::int64_t>(state.rebuild_due));
     file.set_attr("/", "skin", state.skin_m);
     file.set_attr("/", "last_sort_step", state.last_sort_step);
@@ -48,6 +47,10 @@ void write(const std::string& path, MPI_Comm comm, const Scene& scene, const Run
     if (particles.angular_velocity)
       file.write_rows("/particles/angular_velocity", particles.angular_velocity, n, 3);
     file.write_rows("/particles/contact_count", particles.contact_count, n, 1);
+    {  // floats, held exactly as doubles
+      const std::vector<double> anchor(particles.anchor, particles.anchor + 4 * n);
+      file.write_rows("/particles/list_anchor", anchor.data(), n, 4);
+    }
     file.create_group("/contacts");
     file.write_rows("/contacts/partner", particles.partner, m, 1);
     file.write_rows("/contacts/spring", particles.spring, m, 3);
@@ -88,7 +91,7 @@ Reader::Reader(const std::string& path, MPI_Comm comm) : file_(h5::File::open_re
   // Everything below reads metadata every rank sees alike, so every rank throws the same InputError;
   // the values (scan_values) are checked in slices, with one collective verdict.
   const h5::File& f = file_;
-  schema::check_format(f, schema::kCheckpoint);
+  version_ = schema::check_format(f, schema::kCheckpoint);
   auto nonnegative = [&](const char* name, std::int64_t v) {
     if (v < 0)
       throw InputError(path + ": attribute '" + name + "' of '/' is " + std::to_string(v) + ", expected >= 0");
@@ -97,7 +100,7 @@ Reader::Reader(const std::string& path, MPI_Comm comm) : file_(h5::File::open_re
   RunState& s = state_;
   s.step = nonnegative("step", f.attr_int("/", "step"));
   s.time_s = schema::finite_attr(f, "/", "time");
-  s.displacement_bound_m = schema::finite_attr(f, "/", "displacement_bound");
+  // versions 1 and 2 held one displacement bound instead of the anchors: not needed, the restart rebuilds
   s.rebuild_due = f.attr_int("/", "rebuild_due") != 0;
   if (f.has_attr("/", "skin")) s.skin_m = schema::finite_attr(f, "/", "skin");  // version 1's first files: none
   s.last_sort_step = nonnegative("last_sort_step", f.attr_int("/", "last_sort_step"));
@@ -133,6 +136,7 @@ Reader::Reader(const std::string& path, MPI_Comm comm) : file_(h5::File::open_re
   schema::require_shape(f, "/particles/velocity", {n, 3}, nwhy);
   if (f.exists("/particles/angular_velocity")) schema::require_shape(f, "/particles/angular_velocity", {n, 3}, nwhy);
   schema::require_shape(f, "/particles/contact_count", {n}, nwhy);
+  if (version_ >= 3) schema::require_shape(f, "/particles/list_anchor", {n, 4}, nwhy);
   schema::require_shape(f, "/contacts/partner", {m}, mwhy);
   schema::require_shape(f, "/contacts/spring", {m, 3}, mwhy);
   for (const char* d : {"/particles/id", "/particles/contact_count", "/contacts/partner"})
@@ -168,6 +172,15 @@ void Reader::scan_values(MPI_Comm comm, std::int64_t n, std::int64_t m) const {
       if (!file_.exists(d)) continue;
       const std::vector<double> v = file_.read_rows_double(d, p0, p1 - p0);
       schema::require_finite(path, d, v.data(), v.size(), 3, static_cast<std::size_t>(p0));
+    }
+    if (version_ >= 3) {
+      const char* d = "/particles/list_anchor";
+      const std::vector<double> a = file_.read_rows_double(d, p0, p1 - p0);
+      schema::require_finite(path, d, a.data(), a.size(), 4, static_cast<std::size_t>(p0));
+      for (std::size_t k = 3; k < a.size(); k += 4)
+        if (!(a[k] >= 0))
+          throw InputError(path + ": dataset '" + std::string(d) + "' holds the reach " + std::to_string(a[k]) +
+                           " at row " + std::to_string(p0 + static_cast<std::int64_t>(k / 4)) + ", expected >= 0");
     }
     const std::vector<std::int64_t> id = file_.read_rows_int("/particles/id", p0, p1 - p0);
     for (std::size_t i = 0; i < id.size(); ++i)
@@ -218,6 +231,10 @@ ParticleData Reader::particles(std::int64_t first, std::int64_t count, std::int6
   d.contact_count = file_.read_rows_int("/particles/contact_count", first, count);
   d.partner = file_.read_rows_int("/contacts/partner", contact_first, contact_count);
   d.spring = file_.read_rows_double("/contacts/spring", contact_first, contact_count);
+  if (version_ >= 3) {
+    const std::vector<double> a = file_.read_rows_double("/particles/list_anchor", first, count);
+    d.anchor.assign(a.begin(), a.end());  // floats written as doubles: exact
+  }
   return d;
 }
 

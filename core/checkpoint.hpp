@@ -27,9 +27,8 @@ struct Frame {
 struct RunState {
   std::int64_t step = 0;
   double time_s = 0;
-  double displacement_bound_m = 0;  // bound on any particle's displacement since the last list build
   bool rebuild_due = false;         // the neighbour list must be rebuilt before the next step
-  double skin_m = 0;                // the list's skin (adaptive skin: the last build's; 0: not stored)
+  double skin_m = 0;                // the last build's largest pair skin (0: not stored)
   std::int64_t last_sort_step = 0;  // step of the last reordering by cell
   std::int64_t neighbor_rebuilds = 0;
   double wall_seconds = 0;            // wall time of the whole run so far (all sessions)
@@ -50,6 +49,7 @@ struct ParticleRows {
   std::int64_t contact_rows = 0;
   const std::int64_t* partner = nullptr;  // partner's global id
   const double* spring = nullptr;         // tangential history spring (x 3), as seen from the particle
+  const float* anchor = nullptr;          // neighbour-list anchor (x 4: position at the last build, reach), m
 };
 
 /// The fluid fields a bit-exact restart needs, by dataset name under /fluid, in this order. Each is
@@ -89,6 +89,7 @@ struct ParticleData {
   std::vector<std::int64_t> contact_count;
   std::vector<std::int64_t> partner;
   std::vector<double> spring;
+  std::vector<float> anchor;  // 4 per particle; empty from a checkpoint older than version 3
 };
 
 /// An open checkpoint, for reading (any rank count).
@@ -127,6 +128,7 @@ class Reader {
   std::int64_t ranks_ = 1;
   std::vector<std::int64_t> particle_counts_, contact_counts_;
   std::int64_t fluid_cells_ = 0;
+  std::int64_t version_ = 0;
   void scan_values(MPI_Comm comm, std::int64_t n, std::int64_t m) const;
 };
 

@@ -621,8 +621,8 @@ std::string describe_scene(const Scene& s) {
     row("contacts", std::string(to_string(s.contact.model)) + " (e = " + num(s.contact.restitution) +
                         ", t* = " + num(s.contact.t_star) + ", neighbour skin " +
                         (s.contact.skin_over_dp ? num(*s.contact.skin_over_dp) + " d_p)"
-                                                : "adaptive, " + num(ContactConfig::kAdaptiveSkinMin) + "-" +
-                                                      num(ContactConfig::kAdaptiveSkinMax) + " d_p, lists of ~" +
+                                                : "adaptive per particle, " + num(ContactConfig::kAdaptiveSkinMin) + "-" +
+                                                      num(ContactConfig::kAdaptiveSkinMax) + " d_p, used up in ~" +
                                                       std::to_string(s.numerics.skin_target_steps) + " steps)"));
   else
     row("contacts", "none (no neighbour search)");

@@ -40,9 +40,9 @@ struct ContactConfig {
   double friction = 0.1;             // Coulomb mu_pp; 0 switches off tangential history and rotation
   double kn_over_kt = 3.5;
   double gamman_over_gammat = 1.0;
-  // Verlet skin in parcel diameters. Given: fixed. Absent: adaptive (docs/models.md "Contact law"): at each
-  // list build the skin is set from the fastest particle so that the list lasts about
-  // numerics.skin_target_steps DEM steps, within [kAdaptiveSkinMin, kAdaptiveSkinMax] parcel diameters.
+  // Verlet skin of a pair in parcel diameters. Given: fixed. Absent: adaptive (docs/models.md "Contact law"):
+  // at each list build each particle's half-skin is set from its own speed so that it would last about
+  // numerics.skin_target_steps DEM steps, a pair's within [kAdaptiveSkinMin, kAdaptiveSkinMax] parcel diameters.
   std::optional<double> skin_over_dp;
   static constexpr double kAdaptiveSkinMin = 0.05, kAdaptiveSkinMax = 0.5;
   /// The smallest skin a run uses (what the slab and ghost checks must allow).

@@ -18,7 +18,6 @@ void write_run_checkpoint(const std::string& path, MPI_Comm comm, const Scene& s
   checkpoint::RunState state;
   state.step = dem.step_index();
   state.time_s = static_cast<double>(dem.step_index()) * dt_s;
-  state.displacement_bound_m = dem.displacement_bound();
   state.rebuild_due = dem.rebuild_due();
   state.skin_m = dem.skin();
   state.last_sort_step = dem.last_sort_step();
@@ -37,6 +36,9 @@ void write_run_checkpoint(const std::string& path, MPI_Comm comm, const Scene& s
   rows.contact_rows = static_cast<std::int64_t>(store.partner.size());
   rows.partner = store.partner.data();
   rows.spring = store.xi.data();
+  // before the first list build there are no anchors yet (the restart then rebuilds: rebuild_due): zeros
+  const std::vector<float> no_anchors(dem.anchors().size() == 4 * p.n_owned ? 0 : 4 * p.n_owned, 0.0f);
+  rows.anchor = no_anchors.empty() ? dem.anchors().data() : no_anchors.data();
   checkpoint::FluidRows fluid_rows;
   if (coupled) fluid_rows = coupled->checkpoint_rows();
   checkpoint::write(path, comm, scene, state, rows, coupled ? &fluid_rows : nullptr);
@@ -88,6 +90,7 @@ RestoredRun load_run_checkpoint(const std::string& path, MPI_Comm comm, const Sc
     // Different rank count: keep the particles this rank owns (by wrapped height).
     std::vector<std::int64_t> kid;
     std::vector<double> kx, kv, kw;
+    d.anchor.clear();  // another layout rebuilds at once (below): the anchors are not needed
     std::int64_t c0 = 0;
     for (std::int64_t i = 0; i < count; ++i) {
       double q[3] = {d.position[3 * i], d.position[3 * i + 1], d.position[3 * i + 2]};
@@ -112,10 +115,10 @@ RestoredRun load_run_checkpoint(const std::string& path, MPI_Comm comm, const Sc
     d.angular_velocity = std::move(kw);
   }
   dem.set_particles(std::move(d.id), std::move(d.position), std::move(d.velocity), std::move(d.angular_velocity));
-  dem.restore(std::move(store), state.displacement_bound_m, !same_layout || state.rebuild_due, step,
-              state.last_sort_step);
+  if (state.skin_m > 0) dem.set_skin(state.skin_m);  // the anchors' reaches are within half the build's skin
+  // no anchors (a checkpoint older than version 3) or another layout: rebuild at the first step
+  dem.restore(std::move(store), std::move(d.anchor), !same_layout || state.rebuild_due, step, state.last_sort_step);
   dem.set_rebuilds(state.neighbor_rebuilds);
-  if (state.skin_m > 0) dem.set_skin(state.skin_m);  // the bound is against the skin the list was built with
   RestoredRun out;
   out.step = step;
   out.book.wall_seconds = state.wall_seconds;

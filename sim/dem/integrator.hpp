@@ -56,6 +56,7 @@ struct KernelStats {
   double max_overlap = 0;     // m
   std::int64_t overlap_particle = -1, overlap_partner = -1;
   std::int64_t bad_particle = -1;  // first particle with a non-finite velocity
+  bool left_reach = false;         // a particle moved further from its anchor than its reach (DemSystem)
 };
 
 struct KernelConstants {
@@ -157,11 +158,12 @@ void compute_forces(const Particles& p, NeighborList& list, const Contact& conta
 
 /// Pass 2: kick and drift the particles of `idx` in place from the forces of pass 1 (per row: `rows`, a
 /// subsequence of `idx`, both increasing; zero for a particle whose list is empty) and the drive; spins
-/// from the torques. Records the largest speed and the first non-finite velocity.
+/// from the torques. Records the largest speed, the first non-finite velocity, and whether a particle's new
+/// position lies further from its anchor (x, y, z, reach: 4 floats per particle) than its reach.
 template <class Drive>
 void integrate(Particles& p, const double* __restrict force, const double* __restrict torque, const Drive& drive,
                const KernelConstants& k, const std::int32_t* idx, std::size_t n, const std::int32_t* rows,
-               std::size_t n_rows, KernelStats& st) {
+               std::size_t n_rows, const float* __restrict anchor, KernelStats& st) {
   double* __restrict x = p.x.data();
   double* __restrict v = p.v.data();
   double* __restrict w = p.rotation ? p.w.data() : nullptr;
@@ -184,6 +186,7 @@ void integrate(Particles& p, const double* __restrict force, const double* __res
         __builtin_prefetch(w + ia);
         __builtin_prefetch(w + ia + 2);
       }
+      __builtin_prefetch(anchor + 4 * static_cast<std::size_t>(idx[m + kAhead]));
     }
     // a particle without a list has no force: the zero the force array used to hold for it
     const bool has_force = r < n_rows && static_cast<std::size_t>(rows[r]) == i;
@@ -191,6 +194,12 @@ void integrate(Particles& p, const double* __restrict force, const double* __res
     const double s2 = kick_drift(i, x + 3 * i, v + 3 * i, f, drive, k);
     if (w) store3(w + 3 * i, kicked_spin(load3(w + 3 * i), has_force ? load3(torque + 3 * r) : zero, k));
     r += has_force;
+    {
+      const float* a = anchor + 4 * i;
+      const V3 dx = load3(x + 3 * i) - V3{a[0], a[1], a[2]};
+      const double reach = a[3];
+      st.left_reach |= !(dot(dx, dx) <= reach * reach);  // NaN too
+    }
     if (!(s2 <= st.max_speed2)) {  // also true for NaN
       if (!std::isfinite(s2) && st.bad_particle < 0) st.bad_particle = p.id[i];
       st.max_speed2 = std::isfinite(st.max_speed2) ? s2 : st.max_speed2;

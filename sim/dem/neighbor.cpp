@@ -45,8 +45,9 @@ Grid make_grid(const Particles& p, std::size_t count, double cell_size) {
 
 }  // namespace
 
-void NeighborList::build(const Particles& p, double cutoff, bool with_history) {
-  const Grid g = make_grid(p, p.n_total, cutoff);
+void NeighborList::build(const Particles& p, double cell_size, double contact_distance, const float* half_skin,
+                         bool with_history) {
+  const Grid g = make_grid(p, p.n_total, cell_size);
   const std::size_t ncell = g.count();
   // counting sort of all particles (owned + ghosts) into cells, in place (issue 17: no copy of the cell
   // array, no allocation once the buffers have grown): counts at c + 1, prefix sums make cell_start_[c + 1]
@@ -64,16 +65,17 @@ void NeighborList::build(const Particles& p, double cutoff, bool with_history) {
   // one stream per row of cells instead of one cache miss per candidate (the scan was 29 % of a developed
   // Table 1 step, most of it on the candidate's position)
   cell_x_.resize(3 * p.n_total);
+  cell_h_.resize(p.n_total);
   for (std::size_t i = p.n_total; i-- > 0;) {
     const std::int32_t k = --cell_start_[cell_of_[i] + 1];
     cell_items_[k] = static_cast<std::int32_t>(i);
     cell_x_[3 * k] = p.x[3 * i];
     cell_x_[3 * k + 1] = p.x[3 * i + 1];
     cell_x_[3 * k + 2] = p.x[3 * i + 2];
+    cell_h_[k] = half_skin[i];
   }
   cell_start_[ncell + 1] = static_cast<std::int32_t>(p.n_total);
   const std::int32_t* start = cell_start_.data() + 1;  // start[c] .. start[c + 1]: cell c
-  const double cut2 = cutoff * cutoff;
   offset.resize(p.n_owned + 1);
   offset[0] = 0;
   // the list is written through a raw pointer, branch-free (issue 17, third round): every candidate is
@@ -82,6 +84,7 @@ void NeighborList::build(const Particles& p, double cutoff, bool with_history) {
   std::size_t n = 0;
   for (std::size_t i = 0; i < p.n_owned; ++i) {
     const double* xi_ = &p.x[3 * i];
+    const double reach_i = contact_distance + static_cast<double>(half_skin[i]);
     const int c = cell_of_[i];
     const int cx = c % g.n[0], cy = (c / g.n[0]) % g.n[1], cz = c / (g.n[0] * g.n[1]);
     const int x0 = std::max(cx - 1, 0), x1 = std::min(cx + 1, g.n[0] - 1);
@@ -106,9 +109,10 @@ void NeighborList::build(const Particles& p, double cutoff, bool with_history) {
       for (std::int32_t k = rb[r]; k < re[r]; ++k) {
         const double* xj = &cell_x_[3 * k];
         const double ddx = xi_[0] - xj[0], ddy = xi_[1] - xj[1], ddz = xi_[2] - xj[2];
+        const double cut = reach_i + static_cast<double>(cell_h_[k]);
         const std::int32_t j = cell_items_[k];
         out[n] = j;
-        n += static_cast<std::size_t>((ddx * ddx + ddy * ddy + ddz * ddz < cut2) & (j != self));
+        n += static_cast<std::size_t>((ddx * ddx + ddy * ddy + ddz * ddz < cut * cut) & (j != self));
       }
     }
     // canonical order: by partner id (see header); lists are short, insertion sort
@@ -170,7 +174,7 @@ std::size_t NeighborList::bytes() const {
   return offset.capacity() * sizeof(std::int64_t) + index.capacity() * sizeof(std::int32_t) +
          xi.capacity() * sizeof(double) +
          (cell_start_.capacity() + cell_items_.capacity() + cell_of_.capacity()) * sizeof(std::int32_t) +
-         cell_x_.capacity() * sizeof(double);
+         cell_x_.capacity() * sizeof(double) + cell_h_.capacity() * sizeof(float);
 }
 
 std::vector<std::int32_t> spatial_order(const Particles& p, double cell_size) {

@@ -1,5 +1,9 @@
 #pragma once
-// Neighbour search: cell binning + Verlet list with a skin (cutoff = contact distance + skin).
+// Neighbour search: cell binning + Verlet list with a skin per particle (issue 25): particles i and j are
+// listed when r_ij < d + h_i + h_j, h_i particle i's half-skin (DemSystem sets it from the particle's own
+// speed, so that the slow particles of a dense suspension do not carry the fastest one's skin; a fixed skin
+// is h_i = skin / 2 for all). The list holds every pair that can touch while no particle has moved more than
+// its own h_i since the build (|dr| <= |dx_i| + |dx_j| <= h_i + h_j).
 // The list is *full* (each owned particle lists all its neighbours, owned or ghost) and each
 // particle's neighbours are sorted by global id. With the newton-off evaluation this makes every
 // particle's force a sum in a canonical order: the result does not depend on the particle order,
@@ -15,9 +19,12 @@ namespace cgd::dem {
 
 class NeighborList {
  public:
-  /// Build the list of owned particles from positions of owned + ghost particles.
-  /// `with_history`: keep one tangential spring (3 doubles) per entry.
-  void build(const Particles& p, double cutoff, bool with_history);
+  /// Build the list of owned particles from positions of owned + ghost particles: the pairs closer than
+  /// contact_distance + half_skin[i] + half_skin[j] (half_skin: one per owned particle and ghost, each at most
+  /// (cell_size - contact_distance) / 2; cell_size is the binning's). `with_history`: keep one tangential
+  /// spring (3 doubles) per entry.
+  void build(const Particles& p, double cell_size, double contact_distance, const float* half_skin,
+             bool with_history);
   /// Active contacts (non-zero spring) of every owned particle, keyed by partner id.
   void save_history(const Particles& p, ContactStore& store) const;
   /// Set each entry's spring from the store (entries whose partner is not in the store get zero).
@@ -33,6 +40,7 @@ class NeighborList {
  private:
   std::vector<std::int32_t> cell_start_, cell_items_, cell_of_;
   std::vector<double> cell_x_;  // positions in cell order (cell_items_'s), 3 per particle, rebuilt each build
+  std::vector<float> cell_h_;   // half-skins in cell order
 };
 
 /// Permutation that orders the owned particles by the cell they lie in (memory locality).

@@ -34,10 +34,17 @@ DemSystem::DemSystem(const DemSettings& settings, MPI_Comm comm)
     skin_max_m_ = std::max(s_.skin_min_m, s_.skin_max_m);
     skin_m_ = std::clamp(s_.skin_m, skin_min_m_, skin_max_m_);
   }
-  if (s_.contacts) {
+  // an anchor is a float: its rounding (at most 2^-24 of the largest coordinate, in [0, L) after the wrap)
+  // comes off every reach, four times over
+  anchor_margin_m_ = std::ldexp(std::max({s_.box_m[0], s_.box_m[1], s_.box_m[2]}), -22);
+  {
     // the thinnest slab of all ranks (uneven FFTW blocks): every rank decides alike (no rank left waiting)
     double slab = slabs_.y_hi() - slabs_.y_lo();
     MPI_Allreduce(MPI_IN_PLACE, &slab, 1, MPI_DOUBLE, MPI_MIN, slabs_.comm());
+    thinnest_slab_m_ = slab;
+  }
+  if (s_.contacts) {
+    const double slab = thinnest_slab_m_;
     // an adaptive skin never outgrows the thinnest slab (ghosts come from the neighbouring rank only)
     if (s_.skin_target_steps > 0 && slab - s_.diameter_m >= skin_min_m_) {
       skin_max_m_ = std::min(skin_max_m_, slab - s_.diameter_m);
@@ -72,12 +79,14 @@ void DemSystem::set_particles(std::vector<std::int64_t> ids, std::vector<double>
   selection_due_ = true;
 }
 
-void DemSystem::restore(ContactStore store, double displacement_bound, bool rebuild_due, std::int64_t step,
+void DemSystem::restore(ContactStore store, std::vector<float> anchors, bool rebuild_due, std::int64_t step,
                         std::int64_t last_sort_step) {
   store_ = std::move(store);
   if (store_.offset.size() != p_.n_owned + 1) store_.offset.assign(p_.n_owned + 1, 0);
-  displacement_bound_ = displacement_bound;
-  rebuild_due_ = rebuild_due;
+  anchor_ = std::move(anchors);
+  // without the anchors of every particle (an older checkpoint) nothing bounds the moves since the last
+  // build: rebuild at once (the trajectory then differs from the uninterrupted run's at round-off)
+  rebuild_due_ = rebuild_due || anchor_.size() != 4 * p_.n_owned;
   step_ = step;
   last_sort_step_ = last_sort_step;
   list_valid_ = false;
@@ -93,10 +102,12 @@ void DemSystem::prepare() {
     full_rebuild();
   } else if (!s_.contacts) {
     return;
-  } else if (!list_valid_) {
+  } else if (!list_valid_) {  // a restart between rebuilds
     ScopedPhase t(timers_, t_neigh_);
     catch_up();
-    build_ghosts_and_list();
+    // its list reaches d + 2 skin: beyond the thinnest slab the ghosts would miss pairs, so rebuild instead
+    if (s_.diameter_m + 2.0 * skin_m_ > thinnest_slab_m_) full_rebuild();
+    else build_ghosts_and_list(true);
   } else {
     ScopedPhase t(timers_, t_comm_);
     ghosts_.forward(p_);
@@ -107,9 +118,14 @@ void DemSystem::full_rebuild() {
   if (list_valid_ && p_.rotation) list_.save_history(p_, store_);
   for (std::size_t i = 0; i < p_.n_owned; ++i) slabs_.wrap(&p_.x[3 * i]);
   ghosts_.migrate(p_, store_);
-  if (s_.skin_target_steps > 0 && last_max_speed_ > 0)  // v_max: the same on every rank (one allreduce)
-    skin_m_ = std::clamp(2.0 * static_cast<double>(s_.skin_target_steps) * s_.dt_s * last_max_speed_, skin_min_m_,
-                         skin_max_m_);
+  {
+    // the largest half-skin (of the fastest particle on any rank: a maximum, the same on every rank count)
+    // sets the binning and the ghost shell
+    double v2 = 0;
+    for (std::size_t i = 0; i < p_.n_owned; ++i) v2 = std::max(v2, dot(load3(&p_.v[3 * i]), load3(&p_.v[3 * i])));
+    MPI_Allreduce(MPI_IN_PLACE, &v2, 1, MPI_DOUBLE, MPI_MAX, slabs_.comm());
+    skin_m_ = 2.0 * half_skin(std::sqrt(v2));
+  }
   if (last_sort_step_ < 0 || step_ - last_sort_step_ >= s_.sort_interval_steps) {
     // Reorder owned particles by cell for memory locality. Results do not depend on the order.
     const std::vector<std::int32_t> order = spatial_order(p_, cutoff());
@@ -138,16 +154,59 @@ void DemSystem::full_rebuild() {
     if (has_store) store_ = std::move(sorted_store);
     last_sort_step_ = step_;
   }
-  if (s_.contacts) build_ghosts_and_list();
+  set_anchors();
+  if (s_.contacts) build_ghosts_and_list(false);
   else classify(nullptr);
-  displacement_bound_ = 0.0;
   rebuild_due_ = false;
   ++rebuilds_;
 }
 
-void DemSystem::build_ghosts_and_list() {
-  ghosts_.build(p_, cutoff());
-  list_.build(p_, cutoff(), p_.rotation);
+namespace {
+
+/// The float nearest `a` toward zero / toward +infinity (a >= 0): a bound rounded the safe way.
+float float_down(double a) {
+  float f = static_cast<float>(a);
+  if (static_cast<double>(f) > a) f = std::nextafter(f, 0.0f);
+  return std::max(f, 0.0f);
+}
+float float_up(double a) {
+  float f = static_cast<float>(a);
+  if (static_cast<double>(f) < a) f = std::nextafter(f, HUGE_VALF);
+  return f;
+}
+
+}  // namespace
+
+double DemSystem::half_skin(double speed) const {
+  if (s_.skin_target_steps <= 0) return 0.5 * s_.skin_m;
+  return std::clamp(static_cast<double>(s_.skin_target_steps) * s_.dt_s * speed, 0.5 * skin_min_m_, 0.5 * skin_max_m_);
+}
+
+void DemSystem::set_anchors() {
+  anchor_.resize(4 * p_.n_owned);
+  for (std::size_t i = 0; i < p_.n_owned; ++i) {
+    const V3 v = load3(&p_.v[3 * i]);
+    for (int c = 0; c < 3; ++c) anchor_[4 * i + c] = static_cast<float>(p_.x[3 * i + c]);
+    anchor_[4 * i + 3] = float_down(half_skin(std::sqrt(dot(v, v))) - anchor_margin_m_);
+  }
+}
+
+void DemSystem::build_ghosts_and_list(bool mid_interval) {
+  // mid interval: each side of a pair may have moved up to skin/2 and may move up to skin/2 more (its reach
+  // twice), so every particle is given the half-skin `skin`; otherwise its own, from the speed it has now --
+  // a ghost's from the same bits its owner's comes from (the ghost was copied at this build)
+  const double shell = s_.diameter_m + (mid_interval ? 2.0 : 1.0) * skin_m_;
+  ghosts_.build(p_, shell);
+  half_skin_.resize(p_.n_total);
+  if (mid_interval) {
+    std::fill(half_skin_.begin(), half_skin_.end(), float_up(skin_m_));
+  } else {
+    for (std::size_t i = 0; i < p_.n_total; ++i) {
+      const V3 v = load3(&p_.v[3 * i]);
+      half_skin_[i] = float_up(half_skin(std::sqrt(dot(v, v))));
+    }
+  }
+  list_.build(p_, shell, s_.diameter_m, half_skin_.data(), p_.rotation);
   if (p_.rotation) list_.load_history(p_, store_);
   list_valid_ = true;
   classify(&list_);
@@ -260,13 +319,16 @@ void DemSystem::select_free_flight() {
     for (std::size_t i = 0; i < n; ++i) integrate_[i] = static_cast<std::int32_t>(i);
     return;
   }
-  // |v_k| in [|v_0| - k dt A, |v_0| + k dt A] for k <= kHorizon steps, A a bound on |a| over them, widened
-  // by 1e-9 (the rounding of 100 steps is ~1e-14 of it). A per-particle drive is constant: A = |a|. The
-  // uniform drive a = g - lambda v: with 0 <= lambda dt <= 1/2, |v_{k+1}| <= (1 - lambda dt)|v_k| + dt |g|,
-  // so |v_k| <= max(|v_0|, |g|/lambda) and A = |g| + lambda max(|v_0|, |g|/lambda).
+  // |v_k| <= |v_0| + k dt A for k <= kHorizon steps, A a bound on |a| over them, widened by 1e-9 (the
+  // rounding of 100 steps is ~1e-14 of it). A per-particle drive is constant: A = |a|. The uniform drive
+  // a = g - lambda v: with 0 <= lambda dt <= 1/2, |v_{k+1}| <= (1 - lambda dt)|v_k| + dt |g|, so |v_k| <=
+  // max(|v_0|, |g|/lambda) and A = |g| + lambda max(|v_0|, |g|/lambda). After m steps the particle is then
+  // at most m dt upper from where it is now: it may wait k = (reach - |x - anchor|) / (dt upper) steps before
+  // it could leave its anchor's reach (which would call for a rebuild), and the selection is renewed after
+  // the fewest steps any waiting particle may wait. A particle that may wait fewer than kMinWait steps is
+  // integrated every step (checked exactly there) rather than renewing the selection that often.
   const double h = static_cast<double>(kHorizon) * s_.dt_s;
   constexpr double kSlack = 1e-9;
-  double lower_max = 0;
   const auto accel_bound = [&](const auto& drive, std::size_t i, V3 v, double s) {
     if constexpr (std::is_same_v<std::decay_t<decltype(drive)>, PerParticleDrive>) {
       const V3 a = drive(i, v);
@@ -276,29 +338,30 @@ void DemSystem::select_free_flight() {
       return lambda > 0 ? g + lambda * std::max(s, g / lambda) : g;
     }
   };
+  std::int64_t horizon = kHorizon;
   with_drive([&](const auto& drive) {
-    for (std::size_t i = 0; i < n; ++i) {
-      if (referenced_[i]) continue;
-      const V3 v = load3(&p_.v[3 * i]);
-      const double s = std::sqrt(dot(v, v)), A = accel_bound(drive, i, v, s);
-      if (std::isfinite(s) && std::isfinite(A)) lower_max = std::max(lower_max, (s - h * A) * (1.0 - kSlack));
-    }
     for (std::size_t i = 0; i < n; ++i) {
       bool every_step = referenced_[i] != 0;
       if (!every_step) {
         const V3 v = load3(&p_.v[3 * i]);
         const double s = std::sqrt(dot(v, v)), A = accel_bound(drive, i, v, s);
         const double upper = (s + h * A) * (1.0 + kSlack);
-        every_step = !(std::isfinite(s) && std::isfinite(A)) || (upper > 0.0 && upper >= lower_max);
+        const V3 dx = load3(&p_.x[3 * i]) - V3{anchor_[4 * i], anchor_[4 * i + 1], anchor_[4 * i + 2]};
+        const double room = static_cast<double>(anchor_[4 * i + 3]) - std::sqrt(dot(dx, dx)) * (1.0 + kSlack);
+        // steps it may wait (kHorizon when nothing moves it); NaN and infinities fail the comparison
+        const double steps = upper > 0.0 ? room / (s_.dt_s * upper) : (room >= 0.0 ? HUGE_VAL : -1.0);
+        every_step = !(steps >= static_cast<double>(kMinWait));
+        if (!every_step) horizon = std::min(horizon, static_cast<std::int64_t>(std::min(steps, static_cast<double>(kHorizon))));
       }
       (every_step ? integrate_ : dormant_).push_back(static_cast<std::int32_t>(i));
     }
   });
+  selection_horizon_ = horizon;
 }
 
 void DemSystem::advance() {
   ScopedPhase t(timers_, t_force_);
-  if (selection_due_ || step_ - selection_step_ >= kHorizon) {
+  if (selection_due_ || step_ - selection_step_ >= selection_horizon_) {
     catch_up();
     select_free_flight();
   }
@@ -318,18 +381,20 @@ void DemSystem::commit() {
     ScopedPhase t(timers_, t_force_);
     with_drive([&](const auto& drive) {
       integrate(p_, force_.data(), torque_.data(), drive, kc_, integrate_.data(), integrate_.size(),
-                force_rows_.data(), force_rows_.size(), last_stats_);
+                force_rows_.data(), force_rows_.size(), anchor_.data(), last_stats_);
     });
   }
   const double time_s = static_cast<double>(step_) * s_.dt_s;
   ++step_;
-  // one reduction per step: max speed (for the displacement bound), max overlap, blow-up flag
-  double local[3] = {std::isfinite(last_stats_.max_speed2) ? last_stats_.max_speed2 : HUGE_VAL,
-                     last_stats_.max_overlap, last_stats_.bad_particle >= 0 ? 1.0 : 0.0};
-  double global[3];
+  // one reduction per step: max speed (a non-finite one is a blow-up), max overlap, blow-up flag, and
+  // whether a particle has left its anchor's reach (the list is then rebuilt before the next step)
+  double local[4] = {std::isfinite(last_stats_.max_speed2) ? last_stats_.max_speed2 : HUGE_VAL,
+                     last_stats_.max_overlap, last_stats_.bad_particle >= 0 ? 1.0 : 0.0,
+                     last_stats_.left_reach ? 1.0 : 0.0};
+  double global[4];
   {
     ScopedPhase t(timers_, t_comm_);
-    MPI_Allreduce(local, global, 3, MPI_DOUBLE, MPI_MAX, slabs_.comm());
+    MPI_Allreduce(local, global, 4, MPI_DOUBLE, MPI_MAX, slabs_.comm());
   }
   const double overlap_rel = global[1] / s_.diameter_m;
   last_max_overlap_rel_ = overlap_rel;
@@ -354,9 +419,7 @@ void DemSystem::commit() {
           << " %): contacts too soft for the impact speeds, or the time step too large for them";
     throw RunError(msg.str());
   }
-  last_max_speed_ = std::sqrt(global[0]);
-  displacement_bound_ += s_.dt_s * last_max_speed_;
-  if (2.0 * displacement_bound_ > skin_m_) rebuild_due_ = true;
+  if (global[3] > 0) rebuild_due_ = true;
 }
 
 Diagnostics DemSystem::diagnostics(bool synchronous) const {

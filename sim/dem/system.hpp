@@ -6,6 +6,17 @@
 //   [output of step n: x_n and v_n = (v_{n-1/2} + v_{n+1/2})/2, v_{n+1/2} formed from the forces]
 //   commit()   integration pass in place, reduce the displacement bound, detect blow-ups
 //
+// Neighbour lists (issue 25): each particle carries its own half-skin h_i, set at every full rebuild from
+// its own speed (DemSettings: h_i = target steps x dt x |v_i|, clamped; a fixed skin gives every particle
+// h = skin / 2), and the list holds the pairs closer than d + h_i + h_j (neighbor.hpp). It stays valid while
+// no particle has moved more than its own h_i from where it was at the build (its anchor), so the list is
+// rebuilt when one has: an exact, per-particle predicate (integrated particles are checked every step in the
+// integration pass, particles in free flight by a bound, below), the same on every rank count and across a
+// restart (the anchors are checkpointed), so rebuilds -- and the wraps into the box they do, which change
+// round-off -- happen at the same steps. In a dense suspension the slow majority no longer carries the
+// skin of the one fastest particle (the global skin of before: 6.6 list entries per particle at <phi> = 0.20
+// in a gas channel, 2.7 with skins per particle).
+//
 // Free flight (issue 17). In a dilute suspension most particles have an empty neighbour list: nothing
 // can touch them before the next rebuild, and their step is the drive's kick and a drift. They are
 // not moved every step: they wait (`dormant_`) and are brought up to date -- the same kick_drift, once
@@ -13,13 +24,11 @@
 // at them: before a rebuild, at particles() (a fluid-step boundary: the coupler reads and writes them),
 // diagnostics, output and checkpoints. A particle stays in the integration pass when a list on any rank
 // refers to it (GhostExchange::restrict_forward), and its ghosts are then the only ones forwarded.
-// The rebuild criterion needs each step's largest speed exactly (it decides the steps of the wraps):
-// a waiting particle's speed after k steps lies within |v_0| -+ k dt |a|, so over a horizon of
-// kHorizon steps only the few whose upper bound reaches the largest lower bound can hold the maximum;
-// those (`candidates`) are integrated every step with the others, so the maximum is the one the plain
-// pass finds, and rebuilds, wraps and trajectories are those of integrating everyone every step.
-// The drive may depend on the velocity (the quiescent fluid's linear drag): the bound on |a| then uses
-// the drag's contraction (select_free_flight).
+// A waiting particle's speed after k <= kHorizon steps lies within |v_0| + k dt |a|, which bounds how far it
+// can drift: it waits only while that bound keeps it within its anchor's reach, and the selection is renewed
+// before the first waiting particle could leave it (select_free_flight), so the rebuild predicate needs no
+// look at the waiting particles. The drive may depend on the velocity (the quiescent fluid's linear drag): the
+// bound on |a| then uses the drag's contraction.
 #include <mpi.h>
 
 #include <algorithm>
@@ -44,12 +53,12 @@ struct DemSettings {
   bool contacts = true;
   bool friction = true;        // tangential history and rotation
   ContactParams contact;
-  double skin_m = 0;               // fixed skin; with skin_target_steps > 0 the first list's skin
-  // Adaptive skin (skin_target_steps > 0): at each full rebuild the skin is set to 2 v_max dt target steps
-  // (v_max the fastest particle's speed at the last step, the same on every rank), so that a list lasts about
-  // that many steps, clamped to [skin_min_m, skin_max_m] and to what the thinnest slab allows. The list only
-  // needs to hold every pair that can touch before the next rebuild; which extra pairs it holds and when it
-  // is rebuilt change no trajectory (neighbor.hpp), so the skin is free to follow the flow.
+  double skin_m = 0;               // fixed skin (a pair's: h_i + h_j); ignored with skin_target_steps > 0
+  // Adaptive skins (skin_target_steps > 0): at each full rebuild each particle's half-skin is set to
+  // dt x target steps x its own speed, so that it would take about that many steps to use it up, clamped to
+  // [skin_min_m / 2, skin_max_m / 2] (and to what the thinnest slab allows). The list only needs to hold every
+  // pair that can touch before the next rebuild; which extra pairs it holds changes no trajectory
+  // (neighbor.hpp), so the skins are free to follow the flow.
   std::int64_t skin_target_steps = 0;
   double skin_min_m = 0, skin_max_m = 0;
   UniformDrive drive;          // gravity/buoyancy and quiescent drag
@@ -79,9 +88,10 @@ class DemSystem {
   /// Particles outside the slab are moved to their owner at the first rebuild.
   void set_particles(std::vector<std::int64_t> ids, std::vector<double> x, std::vector<double> v,
                      std::vector<double> w);
-  /// Restart: also restore the contact store and the rebuild state, so that the run continues
-  /// exactly as it would have without interruption.
-  void restore(ContactStore store, double displacement_bound, bool rebuild_due, std::int64_t step,
+  /// Restart: also restore the contact store and the rebuild state (the anchors of the last list build: 4
+  /// floats per owned particle, in the order of set_particles; empty forces a rebuild at the first step), so
+  /// that the run continues exactly as it would have without interruption.
+  void restore(ContactStore store, std::vector<float> anchors, bool rebuild_due, std::int64_t step,
                std::int64_t last_sort_step);
 
   void prepare();
@@ -120,7 +130,9 @@ class DemSystem {
   const DemSettings& settings() const { return s_; }
   const SlabDecomposition& slabs() const { return slabs_; }
   std::int64_t step_index() const { return step_; }
-  double displacement_bound() const { return displacement_bound_; }
+  /// Per owned particle: its position at the last full rebuild and how far it may move from it before the
+  /// list must be rebuilt (x, y, z, reach; m, as floats, rounded so that the predicate stays conservative).
+  const std::vector<float>& anchors() const { return anchor_; }
   bool rebuild_due() const { return rebuild_due_; }
   std::int64_t last_sort_step() const { return last_sort_step_; }
   std::int64_t rebuilds() const { return rebuilds_; }
@@ -133,10 +145,11 @@ class DemSystem {
   std::size_t integrated_particles() const { return integrate_.size(); }
   std::size_t ghosts() const { return ghosts_.ghosts(); }
   std::size_t bytes() const;
+  /// The largest pair distance the current list can hold (the binning's cell size, the ghost shell).
   double cutoff() const { return s_.diameter_m + skin_m_; }
-  /// The skin of the current list (fixed, or the adaptive skin of the last build).
+  /// The largest pair skin of the last full rebuild (2 x the largest half-skin; fixed: the skin).
   double skin() const { return skin_m_; }
-  /// Restart: the skin the checkpointed list was built with (its displacement bound is against it).
+  /// Restart: the skin of the checkpointed list's build (its anchors' reaches are within half of it).
   void set_skin(double skin_m) { skin_m_ = std::clamp(skin_m, skin_min_m_, skin_max_m_); }
 
   PhaseTimers& timers() { return timers_; }
@@ -144,14 +157,20 @@ class DemSystem {
 
  private:
   void full_rebuild();
-  void build_ghosts_and_list();
+  /// Ghosts and list; `mid_interval` (a restart between rebuilds): every particle may already have moved up to
+  /// its reach from its anchor, so the pairs are listed at d + 2 skin (each side 2 x the largest half-skin).
+  void build_ghosts_and_list(bool mid_interval);
+  /// A particle's half-skin for its speed (fixed skin: half of it).
+  double half_skin(double speed) const;
+  /// Anchors of the owned particles at a full rebuild (their positions and reaches now).
+  void set_anchors();
   /// After a list build (nullptr: no contacts): the rows with neighbours, the particles some list refers
   /// to (and the ghosts forward() keeps), zero forces; a new free-flight selection is due.
   void classify(const NeighborList* list);
   /// Brings the particles in free flight to the current step (kick_drift once per step missed).
   void catch_up() const;
-  /// Splits the particles without list references into candidates (integrated every step) and the
-  /// ones in free flight, from their velocities and drive now (see the header).
+  /// Splits the particles without list references into those integrated every step and the ones in free
+  /// flight, from their velocities, drive and anchors now (see the header).
   void select_free_flight();
   template <class F>
   void with_drive(F&& f) const;
@@ -166,13 +185,18 @@ class DemSystem {
   KernelConstants kc_;
   KernelStats last_stats_;
   std::int64_t step_ = 0, last_sort_step_ = -1, rebuilds_ = 0;
-  double displacement_bound_ = 0, last_max_overlap_rel_ = 0;
-  double skin_m_ = 0, skin_min_m_ = 0, skin_max_m_ = 0;  // current skin; adaptive bounds (fixed: all equal)
-  double last_max_speed_ = 0;                            // fastest particle at the last step (all ranks)
+  double last_max_overlap_rel_ = 0;
+  double skin_m_ = 0, skin_min_m_ = 0, skin_max_m_ = 0;  // largest pair skin of the list; adaptive bounds
+  double thinnest_slab_m_ = 0;                           // of all ranks (the ghost shell's limit)
+  double anchor_margin_m_ = 0;                           // covers the float rounding of an anchor
+  std::vector<float> anchor_;                            // per owned particle: x, y, z at the build, reach
+  std::vector<float> half_skin_;                         // per owned particle and ghost, for a list build
   bool rebuild_due_ = true, list_valid_ = false;
   // the split step (integrator.hpp): forces of the particles with neighbours, stored between advance()
   // and commit(), zero for the others; free flight
-  static constexpr std::int64_t kHorizon = 100;      // steps a selection of candidates holds
+  static constexpr std::int64_t kHorizon = 100;      // steps a selection holds at most
+  static constexpr std::int64_t kMinWait = 4;        // a particle waits only if it can for this many steps
+  std::int64_t selection_horizon_ = kHorizon;        // steps the current selection holds
   std::vector<double> force_, torque_;               // 3 per row of force_rows_ (not per particle)
   std::vector<std::int32_t> force_rows_;             // owned particles with a non-empty list
   std::vector<char> referenced_;                     // per owned: a list (any rank) refers to it or has one

@@ -399,7 +399,6 @@ TEST_F(OutputTest, CheckpointRoundTripKeepsRunStateParticlesContactsAndFluid) {
   cgd::checkpoint::RunState state;
   state.step = 1234;
   state.time_s = 1234 * 7.18e-7;
-  state.displacement_bound_m = 1.25e-5;
   state.rebuild_due = true;
   state.last_sort_step = 1000;
   state.neighbor_rebuilds = 17;
@@ -410,8 +409,10 @@ TEST_F(OutputTest, CheckpointRoundTripKeepsRunStateParticlesContactsAndFluid) {
   const std::vector<std::int64_t> id{5, 3, 9}, contact_count{1, 0, 2}, partner{3, 5, 5};
   const std::vector<double> x{0.1, 0.2, 0.3, 1.1, 1.2, 1.3, 2.1, 2.2, 2.3}, v{-1, -2, -3, 4, 5, 6, 7, 8, 9},
       w{0.5, 0.25, 0.125, 1, 2, 3, 4, 5, 6}, spring{1e-6, 2e-6, 3e-6, 4e-6, 5e-6, 6e-6, 7e-6, 8e-6, 9e-6};
-  cgd::checkpoint::ParticleRows rows{3, id.data(), x.data(), v.data(), w.data(), contact_count.data(), 3,
-                                     partner.data(), spring.data()};
+  // anchors: floats that are not doubles' round values (0.1f), to show they come back bit for bit
+  const std::vector<float> anchor{0.1f, 0.2f, 0.3f, 1e-6f, 1.1f, 1.2f, 1.3f, 2e-6f, 2.1f, 2.2f, 2.3f, 0.0f};
+  cgd::checkpoint::ParticleRows rows{3,       id.data(),           x.data(), v.data(),      w.data(),
+                                     contact_count.data(), 3, partner.data(), spring.data(), anchor.data()};
   std::vector<std::vector<double>> fields;
   cgd::checkpoint::FluidRows fluid;
   fluid.dt_previous_s = 6.5e-5;
@@ -427,7 +428,6 @@ TEST_F(OutputTest, CheckpointRoundTripKeepsRunStateParticlesContactsAndFluid) {
   const cgd::checkpoint::RunState& back = reader.state();
   EXPECT_EQ(back.step, 1234);
   EXPECT_EQ(back.time_s, state.time_s);
-  EXPECT_EQ(back.displacement_bound_m, 1.25e-5);
   EXPECT_TRUE(back.rebuild_due);
   EXPECT_EQ(back.last_sort_step, 1000);
   EXPECT_EQ(back.neighbor_rebuilds, 17);
@@ -449,6 +449,7 @@ TEST_F(OutputTest, CheckpointRoundTripKeepsRunStateParticlesContactsAndFluid) {
   EXPECT_EQ(p.contact_count, contact_count);
   EXPECT_EQ(p.partner, partner);
   EXPECT_EQ(p.spring, spring);
+  EXPECT_EQ(p.anchor, anchor);
   ASSERT_TRUE(reader.has_fluid());
   EXPECT_EQ(reader.fluid_dt_previous_s(), 6.5e-5);
   EXPECT_EQ(reader.fluid_steps(), 99);
