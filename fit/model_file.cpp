@@ -39,7 +39,7 @@ DragModelFile model_record(const DragModel& M, const std::string& model_form, co
   m.log_a_max = M.log_a_max;
   m.h = {M.h_spline.order, M.h_spline.knots, M.h_spline.coefficients, h_meaning};
   m.log_a = {M.log_a_spline.order, M.log_a_spline.knots, M.log_a_spline.coefficients, log_a_meaning};
-  m.c_corr = {M.c_corr_a, M.c_corr_k, M.c_corr_source, false};
+  m.c_corr = {M.c_corr_a, M.c_corr_k, M.c_corr_source, false, std::nullopt};
   return m;
 }
 

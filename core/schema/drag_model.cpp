@@ -171,13 +171,45 @@ void write_spline(h5::File& f, const char* group, const SplineRecord& s) {
   write_vector(f, child(group, "coefficients"), s.coefficients);
 }
 
-void write_c_corr(h5::File& f, const M::CCorr& c) {
-  f.create_group(kCCorr);
+using ParcelFit = M::CCorr::ParcelFit;
+constexpr Num<ParcelFit> kParcelFitNumbers[] = {{"a_fit", &ParcelFit::a_fit},
+                                                {"k_fit", &ParcelFit::k_fit},
+                                                {"p_value", &ParcelFit::p_value},
+                                                {"k_lower_bound", &ParcelFit::k_lower_bound},
+                                                {"chi2_per_dof", &ParcelFit::chi2_per_dof}};
+constexpr Vec<ParcelFit> kParcelFitRuns[] = {{"runs_alpha", &ParcelFit::runs_alpha},
+                                             {"runs_phi", &ParcelFit::runs_phi},
+                                             {"runs_factor", &ParcelFit::runs_factor},
+                                             {"runs_factor_stderr", &ParcelFit::runs_factor_stderr},
+                                             {"runs_seed", &ParcelFit::runs_seed}};
+
+void write_parcel_fit(h5::File& f, const ParcelFit& p) {
+  for (const auto& n : kParcelFitNumbers) f.set_attr(kCCorr, n.name, p.*n.member);
+  f.set_attr(kCCorr, "dof", p.dof);
+  f.set_attr(kCCorr, "applied", std::int64_t{p.applied ? 1 : 0});
+  f.set_attr(kCCorr, "rejected", std::int64_t{p.rejected ? 1 : 0});
+  f.set_attr(kCCorr, "a_fitted", std::int64_t{p.a_fitted ? 1 : 0});
+  f.set_attr(kCCorr, "decision", p.decision);
+  f.set_attr(kCCorr, "method", p.method);
+  f.set_attr(kCCorr, "k_interval", p.k_interval);
+  f.set_attr(kCCorr, "a_interval", p.a_interval);
+  f.set_attr(kCCorr, "runs", p.runs);
+  for (const auto& v : kParcelFitRuns) f.set_attr(kCCorr, v.name, p.*v.member);
+}
+
+/// The attributes of an existing /c_corr.
+void write_c_corr_attributes(h5::File& f, const M::CCorr& c) {
   f.set_attr(kCCorr, "a", c.a);
   f.set_attr(kCCorr, "k", c.k);
   f.set_attr(kCCorr, "source", c.source);
   f.set_attr(kCCorr, "fitted", std::int64_t{c.fitted ? 1 : 0});
   f.set_attr(kCCorr, "formula", std::string(kCCorrFormula));
+  if (c.parcel_fit) write_parcel_fit(f, *c.parcel_fit);
+}
+
+void write_c_corr(h5::File& f, const M::CCorr& c) {
+  f.create_group(kCCorr);
+  write_c_corr_attributes(f, c);
 }
 
 void write_bands(h5::File& f, const Bands& b) {
@@ -337,6 +369,29 @@ void read_root(const h5::File& f, M& m) {
   if (f.has_attr("/", "scene")) m.scene_toml = f.attr_string("/", "scene");
 }
 
+ParcelFit read_parcel_fit(const h5::File& f) {
+  ParcelFit p;
+  for (const auto& n : kParcelFitNumbers) p.*n.member = f.attr_double(kCCorr, n.name);  // NaN: the fit said so
+  for (const char* key : {"dof", "applied", "rejected", "a_fitted", "decision", "k_interval", "a_interval", "runs"})
+    require_attr(f, kCCorr, key);
+  p.dof = f.attr_int(kCCorr, "dof");
+  p.applied = f.attr_int(kCCorr, "applied") != 0;
+  p.rejected = f.attr_int(kCCorr, "rejected") != 0;
+  p.a_fitted = f.attr_int(kCCorr, "a_fitted") != 0;
+  p.decision = f.attr_string(kCCorr, "decision");
+  if (f.has_attr(kCCorr, "method")) p.method = f.attr_string(kCCorr, "method");
+  p.k_interval = finite_attrs(f, kCCorr, "k_interval", 2);
+  p.a_interval = finite_attrs(f, kCCorr, "a_interval", 2);
+  p.runs = f.attr_strings(kCCorr, "runs");
+  for (const auto& v : kParcelFitRuns) {
+    p.*v.member = f.has_attr(kCCorr, v.name) ? f.attr_doubles(kCCorr, v.name) : std::vector<double>{};
+    if ((p.*v.member).size() != p.runs.size())
+      refuse(f, std::string("attribute '") + v.name + "' of '/c_corr' holds " + std::to_string((p.*v.member).size()) +
+                    " values, expected " + std::to_string(p.runs.size()) + " (one per entry of 'runs')");
+  }
+  return p;
+}
+
 M::CCorr read_c_corr(const h5::File& f) {
   require_group(f, kCCorr);
   M::CCorr c;
@@ -344,6 +399,7 @@ M::CCorr read_c_corr(const h5::File& f) {
   c.k = finite_attr(f, kCCorr, "k");
   c.source = f.attr_string(kCCorr, "source");
   if (f.has_attr(kCCorr, "fitted")) c.fitted = f.attr_int(kCCorr, "fitted") != 0;
+  if (f.has_attr(kCCorr, "a_fit")) c.parcel_fit = read_parcel_fit(f);
   return c;
 }
 
@@ -475,6 +531,10 @@ void write_drag_model(const std::string& path, const Scene& scene, const DragMod
     if (m.diagnostics) write_diagnostics(f, *m.diagnostics);
     write_sources(f, m);
   });
+}
+
+void write_c_corr_copy(const std::string& model_path, const std::string& output_path, const DragModelFile::CCorr& c) {
+  h5::update_copy_atomically(model_path, output_path, [&](h5::File& f) { write_c_corr_attributes(f, c); });
 }
 
 DragModelFile read_drag_model(const std::string& path) {

@@ -58,6 +58,17 @@ struct DragModelFile {
     double a = 0, k = 0.05;
     std::string source = "paper";
     bool fitted = false;
+    /// What cgd-fit --parcel-fit adds (source = "parcel-fit"; docs/schema-drag-model.md "/c_corr").
+    struct ParcelFit {
+      double a_fit = 0, k_fit = 0, p_value = 1, k_lower_bound = 0, chi2_per_dof = 0;
+      std::int64_t dof = 0;
+      bool applied = false, rejected = false, a_fitted = false;
+      std::string decision, method;
+      std::vector<double> k_interval, a_interval;  // 2 each
+      std::vector<std::string> runs;               // one per coarse run, and the runs_* values of each
+      std::vector<double> runs_alpha, runs_phi, runs_factor, runs_factor_stderr, runs_seed;
+    };
+    std::optional<ParcelFit> parcel_fit;
   } c_corr;
 
   struct Bands {  // `/bands`: curves on phi, H on (F, phi)
@@ -115,6 +126,10 @@ struct DragModelFile {
 /// Writes `path` atomically (the calling rank alone): the common attributes and /params of `scene`, and
 /// the model.
 void write_drag_model(const std::string& path, const Scene& scene, const DragModelFile& model);
+
+/// Writes `output_path` atomically: a copy of the model file `model_path` (everything else unchanged) whose
+/// /c_corr attributes are `c_corr` (cgd-fit --parcel-fit).
+void write_c_corr_copy(const std::string& model_path, const std::string& output_path, const DragModelFile::CCorr& c_corr);
 
 /// Reads and validates `path` (docs/schema-drag-model.md "What the reader checks"). InputError naming the
 /// file and the attribute or dataset, what was found and what was expected.

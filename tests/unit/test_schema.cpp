@@ -12,6 +12,7 @@
 #include <cstring>
 #include <filesystem>
 #include <functional>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -283,6 +284,19 @@ Damage attribute_number(const std::string& object, const std::string& name, doub
   };
 }
 
+/// A float-array attribute replaced by `values` (another count than the schema's).
+Damage removed_attribute_values(const std::string& object, const std::string& name, const std::vector<double>& values) {
+  return [=](hid_t f) {
+    H5Adelete_by_name(f, object.c_str(), name.c_str(), H5P_DEFAULT);
+    const hsize_t n = values.size();
+    const hid_t space = H5Screate_simple(1, &n, nullptr);
+    const hid_t attr = H5Acreate_by_name(f, object.c_str(), name.c_str(), H5T_NATIVE_DOUBLE, space, H5P_DEFAULT,
+                                         H5P_DEFAULT, H5P_DEFAULT);
+    EXPECT_GE(H5Awrite(attr, H5T_NATIVE_DOUBLE, values.data()), 0);
+    H5Aclose(attr), H5Sclose(space);
+  };
+}
+
 /// One value of a float dataset overwritten.
 Damage value_at(const std::string& dataset, std::size_t index, double value) {
   return [=](hid_t f) {
@@ -441,7 +455,14 @@ DragModelFile model_record() {
   m.calibrated_delta_m = {3e-4, 6e-4}, m.calibrated_delta_over_dp = {4, 8}, m.calibrated_cells_across = {6, 3};
   m.phi_crit = 0.016, m.phi_max = 0.516, m.h_max = 0.99, m.log_a_min = -0.5, m.log_a_max = 5;
   m.h = spline(4, 6, 0.1), m.log_a = spline(4, 6, 1.0);
-  m.c_corr = {0.2, 0.04, "parcel-fit", true};
+  m.c_corr = {0.2, 0.04, "parcel-fit", true, std::nullopt};
+  DragModelFile::CCorr::ParcelFit p;
+  p.a_fit = 0.2, p.k_fit = 0.04, p.p_value = 0.3, p.k_lower_bound = -0.1, p.chi2_per_dof = 1.2, p.dof = 3;
+  p.applied = true, p.rejected = false, p.a_fitted = true, p.decision = "applied", p.method = "least squares";
+  p.k_interval = {0.01, 0.07}, p.a_interval = {0.05, 0.4};
+  p.runs = {"r1", "r2"}, p.runs_alpha = {1, 2}, p.runs_phi = {0.05, 0.05}, p.runs_factor = {1, 0.9};
+  p.runs_factor_stderr = {0.01, 0.02}, p.runs_seed = {1, 2};
+  m.c_corr.parcel_fit = p;
   DragModelFile::Bands b;
   b.replicates = 50, b.seed = 3, b.confidence = 0.95, b.resampling = "snapshot blocks";
   b.phi = ramp(5, 0, 0.1), b.h = ramp(5, 0, 0.2), b.h_low = ramp(5, -0.1, 0.2), b.h_high = ramp(5, 0.1, 0.2);
@@ -510,6 +531,22 @@ TEST(DragModelSchema, RoundTripKeepsEveryField) {
   EXPECT_EQ(r.c_corr.k, 0.04);
   EXPECT_EQ(r.c_corr.source, "parcel-fit");
   EXPECT_TRUE(r.c_corr.fitted);
+  ASSERT_TRUE(r.c_corr.parcel_fit);
+  {
+    using P = DragModelFile::CCorr::ParcelFit;
+    const P &x = *r.c_corr.parcel_fit, &y = *m.c_corr.parcel_fit;
+    for (auto v : {&P::a_fit, &P::k_fit, &P::p_value, &P::k_lower_bound, &P::chi2_per_dof}) EXPECT_EQ(x.*v, y.*v);
+    EXPECT_EQ(x.dof, y.dof);
+    EXPECT_EQ(x.applied, y.applied);
+    EXPECT_EQ(x.rejected, y.rejected);
+    EXPECT_EQ(x.a_fitted, y.a_fitted);
+    EXPECT_EQ(x.decision, y.decision);
+    EXPECT_EQ(x.method, y.method);
+    EXPECT_EQ(x.runs, y.runs);
+    for (auto v : {&P::k_interval, &P::a_interval, &P::runs_alpha, &P::runs_phi, &P::runs_factor,
+                   &P::runs_factor_stderr, &P::runs_seed})
+      EXPECT_TRUE(same(x.*v, y.*v));
+  }
   ASSERT_TRUE(r.bands && r.bins && r.data && r.diagnostics);
   EXPECT_FALSE(r.table);
   using B = DragModelFile::Bands;
@@ -622,8 +659,32 @@ TEST(DragModelSchema, RefusesDamagedFilesNamingTheFileAndTheKey) {
       {"curves", attribute_as_text("/", "curves", "lines"), "curves", "\"splines\" or \"table\""},
       {"u_t", attribute_as_text("/", "u_t_convention", "stokes"), "u_t_convention", "schiller-naumann"},
       {"order", attribute_number("/h", "order", 4.0), "order", "integer"},
+      {"runs_phi", removed_attribute_values("/c_corr", "runs_phi", {0.05}), "runs_phi", "one per entry of 'runs'"},
+      {"k_interval", removed_attribute_values("/c_corr", "k_interval", {0.1, 0.2, 0.3}), "k_interval", "expected 2"},
+      {"no_decision", remove_attribute("/c_corr", "decision"), "decision", "lacks"},
   };
   expect_refused(good, cases, [](const std::string& p) { cgd::schema::read_drag_model(p); });
+}
+
+// cgd-fit --parcel-fit's copy: /c_corr replaced, everything else as it was.
+TEST(DragModelSchema, CCorrCopyReplacesOnlyTheCorrection) {
+  cgd::testing::TempDir dir("cgd_test_schema");
+  const std::string model = (dir.path() / "model.h5").string(), copy = (dir.path() / "fitted.h5").string();
+  DragModelFile m = model_record();
+  m.c_corr = {0, 0.05, "paper", false, std::nullopt};
+  cgd::schema::write_drag_model(model, schema_scene(), m);
+  DragModelFile::CCorr c = model_record().c_corr;
+  c.a = 0.3;
+  cgd::schema::write_c_corr_copy(model, copy, c);
+  const DragModelFile before = cgd::schema::read_drag_model(model), after = cgd::schema::read_drag_model(copy);
+  EXPECT_EQ(before.c_corr.source, "paper");
+  EXPECT_FALSE(before.c_corr.parcel_fit);
+  EXPECT_EQ(after.c_corr.a, 0.3);
+  EXPECT_EQ(after.c_corr.source, "parcel-fit");
+  ASSERT_TRUE(after.c_corr.parcel_fit);
+  EXPECT_EQ(after.c_corr.parcel_fit->runs, (std::vector<std::string>{"r1", "r2"}));
+  EXPECT_TRUE(same(after.h.knots, before.h.knots) && same(after.bands->H, before.bands->H));
+  EXPECT_EQ(after.created, before.created);
 }
 
 // The shipped model of data/models/ reads through the schema: the layout of version 1 is kept.
