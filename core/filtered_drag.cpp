@@ -1,21 +1,18 @@
-// Filtered drag laws (see filtered_drag.hpp) and the reader of drag model files
-// (docs/schema-drag-model.md).
+// Filtered drag laws (see filtered_drag.hpp) and a drag model file as the evaluator holds it (the file
+// itself is read and validated by core/schema/drag_model.cpp; docs/schema-drag-model.md).
 #include "core/filtered_drag.hpp"
 
 #include <mpi.h>
 
 #include <algorithm>
-#include <iostream>
-
-#include <algorithm>
 #include <array>
+#include <iostream>
 #include <cmath>
 #include <cstdio>
 #include <iterator>
 
 #include "core/error.hpp"
-#include "core/h5.hpp"
-#include "core/output.hpp"
+#include "core/schema/drag_model.hpp"
 
 namespace cgd {
 
@@ -155,26 +152,6 @@ FilteredDragSetup filtered_drag_setup(const Scene& scene, const Vec3& cell_spaci
   return setup;
 }
 
-const CalibrationOperatorNames& names_of(CalibrationOperator op) {
-  for (const CalibrationOperatorNames& n : kCalibrationOperators)
-    if (n.op == op) return n;
-  return kCalibrationOperators[0];  // unreachable: every enumerator has its row
-}
-
-std::optional<CalibrationOperator> parse_calibration_operator(const std::string& text,
-                                                              const char* CalibrationOperatorNames::*place) {
-  for (const CalibrationOperatorNames& n : kCalibrationOperators)
-    if (text == n.*place) return n.op;
-  return std::nullopt;
-}
-
-std::string calibration_operator_choices(const char* CalibrationOperatorNames::*place) {
-  std::string out;
-  for (const CalibrationOperatorNames& n : kCalibrationOperators)
-    out += (out.empty() ? "\"" : " or \"") + std::string(n.*place) + "\"";
-  return out;
-}
-
 std::vector<std::string> model_calibration_warnings(const DragModel& m, double delta_m) {
   std::vector<std::string> out;
   const double d = m.diameter_m > 0 ? m.diameter_m : 1.0;
@@ -223,103 +200,43 @@ double beta_p(DragLaw law, const DragParams& params, const FilteredDragSetup& se
 
 namespace {
 
-BSpline read_spline(const h5::File& f, const std::string& group) {
-  const std::string& path = f.path();
-  if (!f.exists(group)) throw InputError(path + ": drag model file lacks the group " + group);
+BSpline spline_of(const schema::SplineRecord& r) {
   BSpline s;
-  s.order = static_cast<int>(f.attr_int(group, "order"));
-  s.knots = schema::read_doubles(f, group + "/knots", {schema::kAnyExtent}, schema::Finite::Everywhere);
-  s.coefficients =
-      schema::read_doubles(f, group + "/coefficients", {schema::kAnyExtent}, schema::Finite::Everywhere);
-  const std::size_t n = s.coefficients.size();
-  const bool sorted = std::is_sorted(s.knots.begin(), s.knots.end());
-  if (s.order < 1 || s.order > 15 || n < static_cast<std::size_t>(s.order) ||
-      s.knots.size() != n + static_cast<std::size_t>(s.order) || !sorted || !(s.upper() > s.lower()))
-    throw InputError(
-        path + ": " + group +
-        ": not a valid B-spline (needs 1 <= order <= 15, len(knots) = len(coefficients) + order, "
-        "non-decreasing knots spanning an interval)");
+  s.order = r.order;
+  s.knots = r.knots;
+  s.coefficients = r.coefficients;
   return s;
 }
 
 }  // namespace
 
 DragModel load_drag_model(const std::string& path) {
-  h5::File f = h5::File::open_read(path, MPI_COMM_SELF);
-  auto need = [&](const char* key) {
-    if (!f.has_attr("/", key)) throw InputError(path + ": drag model file lacks the root attribute " + key);
-  };
-  schema::check_format(f, schema::kDragModel);
+  const schema::DragModelFile file = schema::read_drag_model(path);  // validated there
   DragModel m;
+  static_cast<PhysicalSystem&>(m) = file.system;
   m.path = path;
-  for (const char* key : {"u_t_convention", "phi_crit", "h_max"}) need(key);
-  static_cast<PhysicalSystem&>(m) = read_physical_system(f, "base_drag", "drag model file");
-  m.u_t_convention = f.attr_string("/", "u_t_convention");
-  if (m.u_t_convention != kUtConvention)
-    throw InputError(path + ": u_t_convention = \"" + m.u_t_convention + "\": this build uses \"" +
-                     kUtConvention + "\" (docs/models.md)");
-  m.phi_crit = schema::finite_attr(f, "/", "phi_crit");
-  m.h_max = schema::finite_attr(f, "/", "h_max");
-  if (!(m.l_char_m > 0) || !(m.phi_crit > 0 && m.phi_crit < 1) || !(m.h_max > 0 && m.h_max < 1))
-    throw InputError(path + ": l_char_m must be > 0, phi_crit and h_max in (0, 1)");
-  // width_exponent arrived after version 1's first files: absent means the paper's form (n = 1)
-  m.width_exponent = f.has_attr("/", "width_exponent") ? schema::finite_attr(f, "/", "width_exponent") : 1.0;
-  if (!(m.width_exponent > 0 && m.width_exponent <= 10))
-    throw InputError(path + ": width_exponent = " + number(m.width_exponent) + ": must be in (0, 10]");
-  m.h_spline = read_spline(f, "/h");
-  m.log_a_spline = read_spline(f, "/log_a");
-  if (!f.exists("/c_corr")) throw InputError(path + ": drag model file lacks the group /c_corr");
-  m.c_corr_a = schema::finite_attr(f, "/c_corr", "a");
-  m.c_corr_k = schema::finite_attr(f, "/c_corr", "k");
-  m.c_corr_source = f.attr_string("/c_corr", "source");
-  // the range of log a: +-inf when the per-bin fits set no bound, never NaN
-  if (f.has_attr("/", "log_a_min")) m.log_a_min = f.attr_double("/", "log_a_min");
-  if (f.has_attr("/", "log_a_max")) m.log_a_max = f.attr_double("/", "log_a_max");
-  if (!(m.log_a_min <= m.log_a_max))
-    throw InputError(path + ": log_a_min = " + number(m.log_a_min) + " > log_a_max = " + number(m.log_a_max));
-  // calibration (absent in files written before it: the box filter)
-  if (f.has_attr("/", "operator")) {
-    const std::string text = f.attr_string("/", "operator");
-    const auto op = parse_calibration_operator(text, &CalibrationOperatorNames::model_file);
-    if (!op)
-      throw InputError(path + ": attribute 'operator' of '/' is \"" + text + "\", expected " +
-                       calibration_operator_choices(&CalibrationOperatorNames::model_file));
-    m.calibration_operator = *op;
-  }
-  if (f.has_attr("/", "calibrated_delta_m")) m.calibrated_delta_m = schema::finite_attrs(f, "/", "calibrated_delta_m");
-  if (f.has_attr("/", "curves")) {
-    const std::string curves = f.attr_string("/", "curves");
-    if (curves != "splines" && curves != "table")
-      throw InputError(path + ": curves = \"" + curves + "\": allowed \"splines\" or \"table\"");
-    m.table = curves == "table";
-  }
-  if (m.table) {
-    if (m.h_spline.order != 2)
-      throw InputError(path + ": curves = \"table\" needs /h of order 2 (piecewise linear), found order " +
-                       std::to_string(m.h_spline.order));
-    if (f.has_attr("/", "table_cells_across")) m.table_cells_across = f.attr_int("/", "table_cells_across");
-  }
-  // provenance and bands (cgd-export)
-  if (f.has_attr("/", "code_version")) m.code_version = f.attr_string("/", "code_version");
-  if (f.has_attr("/", "created")) m.created = f.attr_string("/", "created");
-  if (f.has_attr("/", "calibrated_cells_across")) m.calibrated_cells_across = f.attr_ints("/", "calibrated_cells_across");
-  if (f.exists("/sources") && f.has_attr("/sources", "files")) {
-    m.source_files = f.attr_strings("/sources", "files");
-    if (f.has_attr("/sources", "checksums")) m.source_checksums = f.attr_strings("/sources", "checksums");
-  }
-  if (f.exists("/provenance"))
-    for (const char* key : {"made_by", "resolved_runs", "valid_for", "validation"})
-      if (f.has_attr("/provenance", key)) m.provenance.emplace_back(key, f.attr_string("/provenance", key));
-  if (f.exists("/bands/phi") && f.exists("/bands/F") && f.exists("/bands/H_low") && f.exists("/bands/H_high")) {
-    using schema::Finite;
-    DragModel::Bands& b = m.bands;
-    b.phi = schema::read_doubles(f, "/bands/phi", {schema::kAnyExtent}, Finite::Everywhere);
-    b.F = schema::read_doubles(f, "/bands/F", {schema::kAnyExtent}, Finite::Everywhere);
-    const std::string shape = "(len(/bands/F), len(/bands/phi))";
-    b.H_low = schema::read_doubles(f, "/bands/H_low", {b.F.size(), b.phi.size()}, Finite::Not, shape);
-    b.H_high = schema::read_doubles(f, "/bands/H_high", {b.F.size(), b.phi.size()}, Finite::Not, shape);
-  }
-  f.close();
+  m.u_t_convention = file.u_t_convention;
+  m.phi_crit = file.phi_crit;
+  m.h_spline = spline_of(file.h);
+  m.log_a_spline = spline_of(file.log_a);
+  m.log_a_min = file.log_a_min;
+  m.log_a_max = file.log_a_max;
+  m.h_max = file.h_max;
+  m.width_exponent = file.width_exponent;
+  m.c_corr_a = file.c_corr.a;
+  m.c_corr_k = file.c_corr.k;
+  m.c_corr_source = file.c_corr.source;
+  m.calibration_operator = file.calibration_operator;
+  m.calibrated_delta_m = file.calibrated_delta_m;
+  m.table = file.curves == schema::ModelCurves::Table;
+  m.table_cells_across = file.table_cells_across;
+  m.code_version = file.code_version;
+  m.created = file.created;
+  m.calibrated_cells_across = file.calibrated_cells_across;
+  m.source_files = file.source_files;
+  m.source_checksums = file.source_checksums;
+  m.provenance = file.provenance;
+  if (file.bands) m.bands = DragModel::Bands{file.bands->phi, file.bands->F, file.bands->H_low, file.bands->H_high};
   m.checksum = file_checksum_fnv1a(path);
   return m;
 }

@@ -29,32 +29,10 @@
 #include "core/checksum.hpp"
 #include "core/drag.hpp"
 #include "core/physical_system.hpp"
+#include "core/schema/calibration.hpp"  // CalibrationOperator
 #include "core/scene.hpp"
 
 namespace cgd {
-
-/// The filter a filtered law is calibrated on (docs/schema-drag-model.md "Calibration"): the particle-centred
-/// box of width Delta, or a coarse grid's TSC deposit and interpolation (Delta = its cell size). One idea whose
-/// spellings -- cgd-fit's --operator, the model file's attribute `operator`, the filtered file's grids'
-/// `operator` -- live in one row each of kCalibrationOperators; the code holds the enum.
-enum class CalibrationOperator { Box, TscGrid };
-struct CalibrationOperatorNames {
-  CalibrationOperator op;
-  const char* option;         // cgd-fit --operator
-  const char* model_file;     // drag model file, root attribute `operator`
-  const char* filtered_file;  // filtered file: the width groups' `kind`, the grids' `operator`
-};
-inline constexpr CalibrationOperatorNames kCalibrationOperators[] = {
-    {CalibrationOperator::Box, "box", "box", "box"},
-    {CalibrationOperator::TscGrid, "grid", "tsc-grid", "tsc-deposit-interpolate"},
-};
-const CalibrationOperatorNames& names_of(CalibrationOperator op);
-/// The operator spelled `text` in `place` (&CalibrationOperatorNames::option, ::model_file), if any.
-std::optional<CalibrationOperator> parse_calibration_operator(const std::string& text,
-                                                              const char* CalibrationOperatorNames::*place);
-/// "\"box\" or \"grid\"": the spellings of `place`, for messages.
-std::string calibration_operator_choices(const char* CalibrationOperatorNames::*place);
-
 
 /// Parcel-size correction of the paper's eq. 9: c_corr = a_c + (1 - a_c) exp(-k_c (alpha - 1)).
 /// (Radl & Sundaresan 2014, proceedings paper, eq. 9; paper values a_c = 0, k_c = 0.05.)
@@ -235,9 +213,9 @@ decltype(auto) visit_any_drag_law(DragLaw law, const DragParams& params, const F
 double beta_p(DragLaw law, const DragParams& params, const FilteredDragSetup& setup, double phi,
               double slip_speed);
 
-/// Read a model file. InputError naming the file (and the key) if it is missing, not HDF5, not a
-/// drag_model file, of another format version, or incomplete. Reads on the calling process only
-/// (MPI_COMM_SELF).
+/// Read a model file: read and validated by its schema (core/schema/drag_model.hpp: InputError naming the
+/// file and the attribute or dataset), then held as the evaluator needs it. Reads on the calling process
+/// only (MPI_COMM_SELF).
 DragModel load_drag_model(const std::string& path);
 
 /// InputError naming `model.path`, the scene's file and the differing key, unless the model was made
@@ -246,7 +224,5 @@ DragModel load_drag_model(const std::string& path);
 /// derived u_t and L_char, relative 1e-6).
 void check_model_matches_scene(const DragModel& model, const Scene& scene);
 
-/// "schiller-naumann": the u_t convention of docs/models.md that every cgd file uses.
-inline constexpr const char* kUtConvention = "schiller-naumann";
 
 }  // namespace cgd

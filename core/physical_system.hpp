@@ -22,6 +22,10 @@ namespace h5 {
 class File;
 }
 
+/// "schiller-naumann": the u_t convention of docs/models.md that every cgd file uses (the drag model
+/// file's attribute u_t_convention).
+inline constexpr const char* kUtConvention = "schiller-naumann";
+
 /// The particle/fluid system (SI units). u_t is docs/models.md's (Schiller-Naumann) terminal velocity,
 /// L_char = (u_t^2/g) Fr_p^(-2/3); both derive from the others, and are stored so that a file can be
 /// used without recomputing them.

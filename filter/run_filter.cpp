@@ -1,5 +1,6 @@
 // run_filter: snapshots distributed over the ranks, per-snapshot sums reduced to rank 0, the block
-// bootstrap and the filtered file (docs/schema-filtered.md) written atomically by rank 0.
+// bootstrap, and the filtered file filled as a struct and written by rank 0 through its schema
+// (core/schema/filtered.hpp, docs/schema-filtered.md).
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -7,13 +8,13 @@
 #include <filesystem>
 #include <iostream>
 #include <limits>
+#include <optional>
 #include <random>
 #include <sstream>
 
 #include "core/checksum.hpp"
 #include "core/error.hpp"
-#include "core/filtered_drag.hpp"  // CalibrationOperator
-#include "core/h5.hpp"
+#include "core/schema/filtered.hpp"
 #include "core/timers.hpp"
 #include "core/output.hpp"
 #include "core/scene.hpp"
@@ -261,213 +262,148 @@ std::vector<EquivalentWidth> equivalent_widths(const FilterPlan& plan, const Sta
   return out;
 }
 
+/// The bootstrap's method, as the filtered file states it (attribute `bootstrap`).
+constexpr const char* kBootstrapMethod =
+    "non-overlapping block bootstrap over snapshots, blocks resampled within each run; block "
+    "length max(1, round(2 tau_int)) snapshots, tau_int of the run's domain slip series "
+    "(Sokal window, c = 5); percentile interval";
+
+/// Column w (a width, the whole box or a grid) of a per-(width, bin) array.
+template <class T>
+std::vector<T> column(const std::vector<T>& v, std::size_t w, std::size_t n_bins) {
+  return std::vector<T>(v.begin() + static_cast<std::ptrdiff_t>(w * n_bins),
+                        v.begin() + static_cast<std::ptrdiff_t>((w + 1) * n_bins));
+}
+
+/// The per-snapshot sums of column w: (rows, n_bins) of each field of `sums`.
+schema::FilteredGroup::PerSnapshot per_snapshot_sums(const std::vector<double>& sums, std::size_t w, std::size_t rows,
+                                                     std::size_t n_widths, std::size_t n_bins) {
+  const std::size_t per_row = n_widths * n_bins * kSumFields;
+  auto field = [&](int k) {
+    std::vector<double> v(rows * n_bins);
+    for (std::size_t r = 0; r < rows; ++r)
+      for (std::size_t b = 0; b < n_bins; ++b) v[r * n_bins + b] = sums[r * per_row + (w * n_bins + b) * kSumFields + k];
+    return v;
+  };
+  schema::FilteredGroup::PerSnapshot p;  // fields: count, numerator, micro, slip, phi
+  for (double c : field(0)) p.count.push_back(static_cast<std::int64_t>(std::llround(c)));
+  p.numerator = field(1), p.micro = field(2), p.slip = field(3), p.phi = field(4);
+  return p;
+}
+
+schema::FilteredGroup::Samples sample_columns(const std::vector<Sample>& samples) {
+  schema::FilteredGroup::Samples s;
+  for (const Sample& x : samples) {
+    s.phi.push_back(x.phi);
+    s.numerator.push_back(x.numerator);
+    s.beta_micro.push_back(x.beta_micro);
+    s.snapshot.push_back(x.snapshot);
+    s.id.push_back(x.id);
+    for (int d = 0; d < 3; ++d) s.slip.push_back(x.slip[d]), s.grad_p_filtered.push_back(x.grad_p_filtered[d]);
+  }
+  return s;
+}
+
+schema::FilteredGroup::Grid grid_attributes(const CoarseGrid& c, const EquivalentWidth& e, double diameter_m) {
+  schema::FilteredGroup::Grid g;
+  g.cells_across = static_cast<std::int64_t>(c.cells_across);
+  g.cells.assign(c.grid.cells.begin(), c.grid.cells.end());
+  g.dx_over_dp = c.dx_over_dp;
+  g.cell_spacing_m.assign(c.grid.spacing_m.begin(), c.grid.spacing_m.end());
+  g.cell_size_m = c.grid.cell_size_m();
+  g.cell_size_over_dp = g.cell_size_m / diameter_m;
+  g.void_fraction_floor = c.void_fraction_floor;
+  g.equivalent_width_m = e.width_m;
+  g.equivalent_width_over_dp = e.width_m / diameter_m;
+  g.equivalent_width_over_grid_cell = e.width_m / g.cell_size_m;
+  g.equivalent_width_bins = e.bins;
+  g.equivalent_width_at_bound = e.at_bound;
+  g.equivalent_width_rms = e.rms;
+  g.equivalent_width_method = kEquivalentWidthMethod;
+  return g;
+}
+
+/// The filtered file (core/schema/filtered.hpp) of the plan's runs and their statistics, written by rank 0.
 void write_filtered_file(const FilterPlan& plan, const FilterOptions& o, const std::vector<double>& sums,
                          const std::vector<std::int64_t>& out_of_range, const std::vector<std::vector<Sample>>& samples,
                          const Statistics& st, const std::vector<std::string>& checksums,
                          const std::vector<EquivalentWidth>& equivalent) {
   const RunPlan& r0 = plan.runs.front();
-  const std::size_t n_widths = plan.columns(), n_bins = plan.bin_edges.size() - 1;
-  const std::size_t whole_col = plan.whole_box_column();
-  const std::size_t rows = plan.snapshot_count();
-  const std::size_t per_row = n_widths * n_bins * kSumFields;
-  const std::uint64_t nb = n_bins;
+  const RunPhysics& p = r0.physics;
+  const std::size_t n_widths = plan.columns(), n_bins = plan.bin_edges.size() - 1, whole_col = plan.whole_box_column();
+  schema::Filtered out;
+  out.scene_toml = p.scene_toml;
+  out.system = p.system();
+  out.parcel_size = p.parcel_size;
+  out.cell_size_m.assign(r0.grid.spacing_m.begin(), r0.grid.spacing_m.end());
+  out.pressure_terms = p.pressure_gradient_force;
+  out.bootstrap_replicates = o.bootstrap_replicates;
+  out.bootstrap_seed = static_cast<std::int64_t>(o.seed);
+  out.confidence = 0.95;
+  out.bootstrap = kBootstrapMethod;
+  for (std::size_t r = 0; r < plan.runs.size(); ++r) {
+    const RunPlan& run = plan.runs[r];
+    out.run_paths.push_back(run.path);
+    out.run_mean_solids_fraction.push_back(run.physics.solids_fraction);
+    out.run_snapshot_count.push_back(static_cast<std::int64_t>(run.files.size()));
+    out.run_tau_int.push_back(st.tau[r]);
+    out.run_block_length.push_back(st.block_len[r]);
+    out.run_n_eff.push_back(st.n_eff_run[r]);
+    for (std::size_t k = 0; k < run.files.size(); ++k) {
+      out.snapshot_files.push_back(run.files[k]);
+      out.snapshot_time_s.push_back(run.times_s[k]);
+      out.snapshot_step.push_back(run.steps[k]);
+      out.snapshot_run_index.push_back(static_cast<std::int64_t>(r));
+    }
+  }
+  out.snapshot_checksums = checksums;
+  out.snapshot_block = st.block_of_row;
+  out.phi_edges = plan.bin_edges;
+  std::vector<double> centre(n_bins);
+  for (std::size_t b = 0; b < n_bins; ++b) centre[b] = 0.5 * (plan.bin_edges[b] + plan.bin_edges[b + 1]);
+  for (std::size_t w = 0; w < n_widths; ++w) {
+    const bool whole = w == whole_col, grid = w > whole_col;
+    const std::size_t gi = grid ? w - whole_col - 1 : 0;
+    const double width = whole ? plan.whole_box_width_m : grid ? r0.coarse[gi].grid.cell_size_m() : plan.widths_m[w];
+    schema::FilteredGroup g;
+    g.kind = whole ? schema::FilterKind::WholeBox : grid ? schema::FilterKind::Grid : schema::FilterKind::Box;
+    g.width_m = width;
+    g.width_over_dp = width / p.diameter_m;
+    g.width_over_cell = width / r0.grid.cell_size_m();
+    g.F = p.l_char_m / width;
+    g.out_of_range = out_of_range[w];
+    if (grid) g.grid = grid_attributes(r0.coarse[gi], equivalent[gi], p.diameter_m);
+    g.phi_center = centre;
+    g.count = column(st.count_int, w, n_bins);
+    g.phi_mean = column(st.phi_mean, w, n_bins);
+    g.slip = column(st.slip, w, n_bins);
+    g.slip_over_ut = g.slip;
+    for (double& x : g.slip_over_ut) x /= p.u_t_m_s;
+    g.drag = column(st.drag, w, n_bins);
+    g.beta_bar = column(st.beta_bar, w, n_bins);
+    g.beta_micro = column(st.beta_micro, w, n_bins);
+    g.H = column(st.H, w, n_bins);
+    g.H_low = column(st.H_low, w, n_bins);
+    g.H_high = column(st.H_high, w, n_bins);
+    g.H_stderr = column(st.H_stderr, w, n_bins);
+    g.n_eff = column(st.n_eff, w, n_bins);
+    g.per_snapshot = per_snapshot_sums(sums, w, plan.snapshot_count(), n_widths, n_bins);
+    if (o.samples > 0) g.samples = sample_columns(samples[w]);
+    out.groups.push_back(std::move(g));
+  }
+  // the first run's scene as this build loads it, for the common attributes and /params
+  std::optional<Scene> scene;
+  try {
+    scene = load_scene_from_string(p.scene_toml, r0.path + "/scene");
+  } catch (const std::exception& e) {
+    // a run whose stored scene this build no longer reads (an older run): its text and the physical
+    // system are still written, the /params of the common attributes are not; said, not swallowed
+    std::cerr << "warning: " << e.what() << ": " << o.output_path
+              << " gets the run's scene text without the common /params\n";
+  }
   const fs::path parent = fs::path(o.output_path).parent_path();
   if (!parent.empty()) fs::create_directories(parent);
-  h5::write_atomically(o.output_path, MPI_COMM_SELF, [&](h5::File& f) {
-    // root attributes and /params: the first run's scene, as the engine wrote it
-    Scene scene;
-    bool scene_ok = false;
-    try {
-      scene = load_scene_from_string(r0.physics.scene_toml, r0.path + "/scene");
-      scene_ok = true;
-    } catch (const std::exception& e) {
-      // a run whose stored scene this build no longer reads (an older run): its text and the physical
-      // system below are still written, the /params of the common attributes are not; said, not swallowed
-      std::cerr << "warning: " << e.what() << ": " << o.output_path
-                << " gets the run's scene text without the common /params\n";
-    }
-    if (scene_ok) {
-      schema::write_common(f, schema::kFiltered, scene);
-    } else {
-      f.set_attr("/", "cgd_format", std::string(schema::kFiltered.name));
-      f.set_attr("/", "cgd_format_version", schema::kFiltered.version);
-      f.set_attr("/", "code_version", std::string(CGD_VERSION));
-      f.set_attr("/", "scene", r0.physics.scene_toml);
-    }
-    const RunPhysics& p = r0.physics;
-    write_physical_system(f, p.system(), "micro_drag");  // the runs' system, gravity_m_s2 included
-    f.set_attr("/", "parcel_size", p.parcel_size);
-    f.set_attr("/", "cell_size_m", std::vector<double>(r0.grid.spacing_m.begin(), r0.grid.spacing_m.end()));
-    f.set_attr("/", "pressure_terms", std::int64_t{p.pressure_gradient_force ? 1 : 0});
-    f.set_attr("/", "H_definition",
-               std::string("H = 1 - sum_i N_i / sum_i beta_micro(phi_bar_i, |u_slip_bar_i|) u_slip_bar_i,y over a bin; "
-                           "N_i = [-grad p_i + grad p_bar_i + beta_p,i (u_i - v_i)]_y; u_slip_bar_i = "
-                           "filter(eps u)/filter(eps) at x_i - v_i; box filter of edge width_m centred on the particle"));
-    f.set_attr("/", "bootstrap_replicates", static_cast<std::int64_t>(o.bootstrap_replicates));
-    f.set_attr("/", "bootstrap_seed", static_cast<std::int64_t>(o.seed));
-    f.set_attr("/", "confidence", 0.95);
-    f.set_attr("/", "bootstrap",
-               std::string("non-overlapping block bootstrap over snapshots, blocks resampled within each run; block "
-                           "length max(1, round(2 tau_int)) snapshots, tau_int of the run's domain slip series "
-                           "(Sokal window, c = 5); percentile interval"));
-    // runs
-    std::vector<std::string> paths;
-    std::vector<double> mean_phi, tau, neff;
-    std::vector<std::int64_t> counts, blen;
-    for (std::size_t r = 0; r < plan.runs.size(); ++r) {
-      paths.push_back(plan.runs[r].path);
-      mean_phi.push_back(plan.runs[r].physics.solids_fraction);
-      counts.push_back(static_cast<std::int64_t>(plan.runs[r].files.size()));
-      tau.push_back(st.tau[r]);
-      blen.push_back(st.block_len[r]);
-      neff.push_back(st.n_eff_run[r]);
-    }
-    const std::uint64_t nr = plan.runs.size();
-    f.create_group("/runs");
-    f.set_attr("/runs", "paths", paths);
-    f.write_replicated("/runs/mean_solids_fraction", mean_phi, {nr});
-    f.write_replicated("/runs/snapshot_count", counts, {nr});
-    f.write_replicated("/runs/block_length", blen, {nr});
-    f.write_replicated("/runs/tau_int", tau, {nr});
-    f.write_replicated("/runs/n_eff", neff, {nr});
-    // snapshots
-    std::vector<std::string> files;
-    std::vector<double> times;
-    std::vector<std::int64_t> run_index, steps;
-    for (std::size_t r = 0; r < plan.runs.size(); ++r)
-      for (std::size_t k = 0; k < plan.runs[r].files.size(); ++k) {
-        files.push_back(plan.runs[r].files[k]);
-        times.push_back(plan.runs[r].times_s[k]);
-        steps.push_back(plan.runs[r].steps[k]);
-        run_index.push_back(static_cast<std::int64_t>(r));
-      }
-    f.create_group("/snapshots");
-    f.set_attr("/snapshots", "files", files);
-    f.set_attr("/snapshots", "checksums", checksums);
-    f.set_attr("/snapshots", "checksum_kind", std::string("FNV-1a 64-bit of the file's bytes, hex"));
-    f.write_replicated("/snapshots/run_index", run_index, {rows});
-    f.write_replicated("/snapshots/time_s", times, {rows});
-    f.write_replicated("/snapshots/step", steps, {rows});
-    f.write_replicated("/snapshots/block", st.block_of_row, {rows});
-    // bins
-    f.create_group("/bins");
-    f.write_replicated("/bins/phi_edges", plan.bin_edges, {nb + 1});
-    f.set_attr("/bins", "width", plan.bin_edges[1] - plan.bin_edges[0]);
-    std::vector<double> centre(n_bins);
-    for (std::size_t b = 0; b < n_bins; ++b) centre[b] = 0.5 * (plan.bin_edges[b] + plan.bin_edges[b + 1]);
-    // widths
-    if (!plan.grids.empty()) {
-      f.create_group("/grids");
-      std::vector<std::int64_t> across(plan.grids.begin(), plan.grids.end());
-      f.set_attr("/grids", "cells_across", across);
-      f.set_attr("/grids", "operator", std::string(names_of(CalibrationOperator::TscGrid).filtered_file));
-      f.set_attr("/grids", "definition",
-                 std::string("per coarse grid (the grid a coarse run with cells_across cells along x builds): phi = TSC "
-                             "deposit of the particles' volume on the coarse cells with the coupler's conservative floor; "
-                             "u = box average over the coarse cell of eps u_c / box average of eps (Favre; u_c the "
-                             "resolved cell-centred velocity); p = box average over the cell; grad p = central "
-                             "differences of the cell values; phi, u, grad p TSC-interpolated to each particle"));
-    }
-    for (std::size_t w = 0; w < n_widths; ++w) {
-      const bool whole = w == whole_col, grid = w > whole_col;
-      const std::size_t gi = grid ? w - whole_col - 1 : 0;
-      const std::string g = whole ? "/whole_box" : grid ? "/grids/" + std::to_string(plan.grids[gi]) : "/width_" + std::to_string(w);
-      const double width = whole ? plan.whole_box_width_m : grid ? r0.coarse[gi].grid.cell_size_m() : plan.widths_m[w];
-      f.create_group(g);
-      f.set_attr(g, "kind", std::string(whole ? "whole_box" : grid ? "grid" : "box"));
-      f.set_attr(g, "width_m", width);
-      f.set_attr(g, "width_over_dp", width / p.diameter_m);
-      f.set_attr(g, "width_over_cell", width / r0.grid.cell_size_m());
-      f.set_attr(g, "F", p.l_char_m / width);
-      f.set_attr(g, "out_of_range", out_of_range[w]);
-      if (grid) {
-        const CoarseGrid& c = r0.coarse[gi];
-        f.set_attr(g, "cells_across", static_cast<std::int64_t>(c.cells_across));
-        f.set_attr(g, "cells", std::vector<std::int64_t>(c.grid.cells.begin(), c.grid.cells.end()));
-        f.set_attr(g, "dx_over_dp", c.dx_over_dp);
-        f.set_attr(g, "cell_spacing_m", std::vector<double>(c.grid.spacing_m.begin(), c.grid.spacing_m.end()));
-        f.set_attr(g, "cell_size_m", c.grid.cell_size_m());
-        f.set_attr(g, "cell_size_over_dp", c.grid.cell_size_m() / p.diameter_m);
-        f.set_attr(g, "kernel", std::string("tsc"));
-        f.set_attr(g, "operator", std::string(names_of(CalibrationOperator::TscGrid).filtered_file));
-        f.set_attr(g, "void_fraction_floor", c.void_fraction_floor);
-        const EquivalentWidth& e = equivalent[gi];
-        f.set_attr(g, "equivalent_width_m", e.width_m);
-        f.set_attr(g, "equivalent_width_over_dp", e.width_m / p.diameter_m);
-        f.set_attr(g, "equivalent_width_over_grid_cell", e.width_m / c.grid.cell_size_m());
-        f.set_attr(g, "equivalent_width_bins", static_cast<std::int64_t>(e.bins));
-        f.set_attr(g, "equivalent_width_at_bound", static_cast<std::int64_t>(e.at_bound ? 1 : 0));
-        f.set_attr(g, "equivalent_width_rms", e.rms);
-        f.set_attr(g, "equivalent_width_analytic_over_grid_cell", std::sqrt(6.0));
-        f.set_attr(g, "equivalent_width_method", std::string(kEquivalentWidthMethod));
-      }
-      auto slice = [&](const std::vector<double>& v) {
-        return std::vector<double>(v.begin() + static_cast<std::ptrdiff_t>(w * n_bins),
-                                   v.begin() + static_cast<std::ptrdiff_t>((w + 1) * n_bins));
-      };
-      f.write_replicated(g + "/phi_center", centre, {nb});
-      f.write_replicated(g + "/count",
-                         std::vector<std::int64_t>(st.count_int.begin() + static_cast<std::ptrdiff_t>(w * n_bins),
-                                                   st.count_int.begin() + static_cast<std::ptrdiff_t>((w + 1) * n_bins)),
-                         {nb});
-      f.write_replicated(g + "/phi_mean", slice(st.phi_mean), {nb});
-      f.write_replicated(g + "/slip", slice(st.slip), {nb});
-      std::vector<double> slip_ut = slice(st.slip);
-      for (double& x : slip_ut) x /= p.u_t_m_s;
-      f.write_replicated(g + "/slip_over_ut", slip_ut, {nb});
-      f.write_replicated(g + "/drag", slice(st.drag), {nb});
-      f.write_replicated(g + "/beta_bar", slice(st.beta_bar), {nb});
-      f.write_replicated(g + "/beta_micro", slice(st.beta_micro), {nb});
-      f.write_replicated(g + "/H", slice(st.H), {nb});
-      f.write_replicated(g + "/H_low", slice(st.H_low), {nb});
-      f.write_replicated(g + "/H_high", slice(st.H_high), {nb});
-      f.write_replicated(g + "/H_stderr", slice(st.H_stderr), {nb});
-      f.write_replicated(g + "/n_eff", slice(st.n_eff), {nb});
-      // per-snapshot sums
-      const std::string ps = g + "/per_snapshot";
-      f.create_group(ps);
-      const char* names[kSumFields] = {"count", "numerator", "micro", "slip", "phi"};
-      for (int field = 0; field < kSumFields; ++field) {
-        std::vector<double> v(rows * n_bins);
-        for (std::size_t k = 0; k < rows; ++k)
-          for (std::size_t b = 0; b < n_bins; ++b) v[k * n_bins + b] = sums[k * per_row + (w * n_bins + b) * kSumFields + field];
-        if (field == 0) {
-          std::vector<std::int64_t> vi(v.size());
-          for (std::size_t i = 0; i < v.size(); ++i) vi[i] = static_cast<std::int64_t>(std::llround(v[i]));
-          f.write_replicated(ps + "/count", vi, {rows, nb});
-        } else {
-          f.write_replicated(ps + "/" + names[field], v, {rows, nb});
-        }
-      }
-      // samples
-      if (o.samples > 0) {
-        const std::vector<Sample>& s = samples[w];
-        const std::uint64_t ns = s.size();
-        std::vector<double> phi, num, bm, slip, gp;
-        std::vector<std::int64_t> snap, id;
-        for (const Sample& x : s) {
-          phi.push_back(x.phi);
-          num.push_back(x.numerator);
-          bm.push_back(x.beta_micro);
-          snap.push_back(x.snapshot);
-          id.push_back(x.id);
-          for (int d = 0; d < 3; ++d) {
-            slip.push_back(x.slip[d]);
-            gp.push_back(x.grad_p_filtered[d]);
-          }
-        }
-        const std::string sg = g + "/samples";
-        f.create_group(sg);
-        f.write_replicated(sg + "/phi", phi, {ns});
-        f.write_replicated(sg + "/slip", slip, {ns, 3});
-        f.write_replicated(sg + "/grad_p_filtered", gp, {ns, 3});
-        f.write_replicated(sg + "/numerator", num, {ns});
-        f.write_replicated(sg + "/beta_micro", bm, {ns});
-        f.write_replicated(sg + "/snapshot", snap, {ns});
-        f.write_replicated(sg + "/id", id, {ns});
-      }
-    }
-  });
+  schema::write_filtered(o.output_path, scene ? &*scene : nullptr, out);
 }
 
 }  // namespace

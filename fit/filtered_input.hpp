@@ -1,6 +1,7 @@
 #pragma once
 // The fitter's view of filtered files (cgd_format = "filtered", docs/schema-filtered.md): what cgd-fit
-// reads from each, and the checks that files pooled into one fit describe the same physics.
+// takes from each (read and validated by core/schema/filtered.hpp, the format's one home), and the checks
+// that files pooled into one fit describe the same physics.
 #include <cmath>
 #include <cstdint>
 #include <string>
@@ -45,8 +46,8 @@ struct FilteredFile {
   std::size_t runs() const { return run_paths.size(); }
 };
 
-/// Read one filtered file. InputError naming the file and the key if it is missing, not HDF5, not
-/// cgd_format = "filtered", of another version, or lacks (or has inconsistent) required datasets.
+/// Read one filtered file through schema::read_filtered (InputError naming the file and the attribute or
+/// dataset: docs/schema-filtered.md "What the reader checks") and keep what the fit uses.
 FilteredFile read_filtered_file(const std::string& path);
 
 /// The files as the fitter sees them for an operator: Box leaves them as read; TscGrid puts each file's

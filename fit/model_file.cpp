@@ -1,12 +1,12 @@
-// The drag model file (docs/schema-drag-model.md; read back by core/filtered_drag.cpp's
-// load_drag_model) and the fit report.
+// The drag model file filled from a fit (the struct of core/schema/drag_model.hpp, written there;
+// docs/schema-drag-model.md; read back by core/filtered_drag.cpp's load_drag_model) and the fit report.
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <sstream>
 
 #include "core/error.hpp"
-#include "core/output.hpp"
+#include "core/schema/drag_model.hpp"
 #include "fit/fitter.hpp"
 
 namespace cgd::fit {
@@ -19,221 +19,145 @@ std::string format(const char* fmt, double x) {
   return buf;
 }
 
-void write_vector(h5::File& f, const std::string& name, const std::vector<double>& v) {
-  f.write_replicated(name, v, {static_cast<std::uint64_t>(v.size())});
-}
+using schema::DragModelFile;
 
-/// /c_corr: c_corr = a + (1 - a) exp(-k (alpha - 1)), not fitted here (the parcel fit writes its own copy).
-void write_c_corr(h5::File& f, double a, double k, const std::string& source) {
-  f.create_group("/c_corr");
-  f.set_attr("/c_corr", "a", a);
-  f.set_attr("/c_corr", "k", k);
-  f.set_attr("/c_corr", "source", source);
-  f.set_attr("/c_corr", "fitted", std::int64_t{0});
-  f.set_attr("/c_corr", "formula", std::string("c_corr = a + (1 - a) exp(-k (alpha - 1))"));
+/// The model's root, curves and c_corr, as the evaluator holds them (DragModel) with their texts.
+DragModelFile model_record(const DragModel& M, const std::string& model_form, const std::string& h_meaning,
+                           const std::string& log_a_meaning) {
+  DragModelFile m;
+  m.system = M;
+  m.model_form = model_form;
+  m.u_t_convention = M.u_t_convention.empty() ? std::string(kUtConvention) : M.u_t_convention;
+  m.width_exponent = M.width_exponent;
+  m.calibration_operator = M.calibration_operator;
+  m.curves = M.table ? schema::ModelCurves::Table : schema::ModelCurves::Splines;
+  m.table_cells_across = M.table_cells_across;
+  m.phi_crit = M.phi_crit;
+  m.phi_max = M.h_spline.upper();
+  m.h_max = M.h_max;
+  m.log_a_min = M.log_a_min;
+  m.log_a_max = M.log_a_max;
+  m.h = {M.h_spline.order, M.h_spline.knots, M.h_spline.coefficients, h_meaning};
+  m.log_a = {M.log_a_spline.order, M.log_a_spline.knots, M.log_a_spline.coefficients, log_a_meaning};
+  m.c_corr = {M.c_corr_a, M.c_corr_k, M.c_corr_source, false, std::nullopt};
+  return m;
 }
 
 /// /sources: the filtered files a model was made from, with their checksums.
-void write_sources(h5::File& f, const std::vector<FilteredFile>& files) {
-  f.create_group("/sources");
-  std::vector<std::string> paths, sums;
-  for (const FilteredFile& ff : files) paths.push_back(ff.path), sums.push_back(ff.checksum);
-  f.set_attr("/sources", "files", paths);
-  f.set_attr("/sources", "checksums", sums);
-  f.set_attr("/sources", "checksum_kind", std::string("FNV-1a 64-bit of the file's bytes, hex"));
+void set_sources(DragModelFile& m, const std::vector<FilteredFile>& files) {
+  for (const FilteredFile& ff : files) m.source_files.push_back(ff.path), m.source_checksums.push_back(ff.checksum);
 }
 
-void write_spline(h5::File& f, const std::string& group, const BSpline& s, const std::string& meaning) {
-  f.create_group(group);
-  f.set_attr(group, "order", static_cast<std::int64_t>(s.order));
-  f.set_attr(group, "meaning", meaning);
-  write_vector(f, group + "/knots", s.knots);
-  write_vector(f, group + "/coefficients", s.coefficients);
+/// The Delta fitted (ascending, distinct) and, on grids, their cells across.
+void set_calibration(DragModelFile& m, const FitResult& R, const std::vector<FilteredFile>& files, const FitOptions& o) {
+  std::vector<double> delta;
+  std::vector<std::int64_t> across;
+  for (std::size_t i = 0; i < R.data_F.size(); ++i)
+    if (R.data_fitted[i]) delta.push_back(R.model.l_char_m / R.data_F[i]);
+  for (const FilteredFile& ff : files)
+    for (const WidthSeries& w : ff.widths)
+      if (w.grid && !(w.width_over_cell < o.min_width_over_cell - 1e-9)) across.push_back(w.cells_across);
+  std::sort(delta.begin(), delta.end());
+  delta.erase(std::unique(delta.begin(), delta.end(), [](double a, double b) { return std::abs(a - b) <= 1e-9 * a; }),
+              delta.end());
+  std::sort(across.begin(), across.end());
+  across.erase(std::unique(across.begin(), across.end()), across.end());
+  m.calibrated_delta_m = delta;
+  for (double x : delta) m.calibrated_delta_over_dp.push_back(x / R.model.diameter_m);
+  m.calibrated_cells_across = across;
+}
+
+DragModelFile::Bands bands_of(const FitResult& R, const FitOptions& o) {
+  DragModelFile::Bands b;
+  b.replicates = R.replicates;
+  b.seed = static_cast<std::int64_t>(o.seed);
+  b.confidence = 0.95;
+  b.resampling = R.resampling;
+  b.phi = R.band_phi, b.h = R.h, b.h_low = R.h_low, b.h_high = R.h_high;
+  b.a = R.a, b.a_low = R.a_low, b.a_high = R.a_high, b.F = R.band_F;
+  b.H = R.H, b.H_low = R.H_low, b.H_high = R.H_high;
+  return b;
+}
+
+/// The per-bin estimates (the data points of the paper's Figure 1), NaN where a bin was not fitted.
+DragModelFile::Bins bins_of(const FitResult& R) {
+  DragModelFile::Bins out;
+  for (const BinEstimate& b : R.bins) {
+    const auto used = [&](double x) { return b.used ? x : NAN; };
+    out.phi.push_back(b.phi);
+    out.phi_center.push_back(b.phi_center);
+    out.h.push_back(used(b.h));
+    out.h_stderr.push_back(used(b.se_h));
+    out.a.push_back(used(std::exp(b.log_a)));
+    out.log_a_stderr.push_back(used(b.se_log_a));
+    out.chi2.push_back(used(b.chi2));
+    out.h_stderr_bootstrap.push_back(used(b.boot_se_h));
+    out.log_a_stderr_bootstrap.push_back(used(b.boot_se_log_a));
+    out.used.push_back(b.used ? 1 : 0);
+    out.widths.push_back(b.widths);
+    out.at_bound.push_back(b.used && b.at_bound ? 1 : 0);
+    out.a_at_cap.push_back(b.used && b.a_at_cap ? 1 : 0);
+  }
+  return out;
+}
+
+DragModelFile::Diagnostics diagnostics_of(const FitResult& R, const FitOptions& o) {
+  DragModelFile::Diagnostics d;
+  d.min_count = o.min_count;
+  d.min_widths = o.min_widths;
+  d.min_width_over_cell = o.min_width_over_cell;
+  d.breakpoints = R.breakpoints;
+  d.lambda_h = R.lambda_h, d.lambda_log_a = R.lambda_log_a, d.edf_h = R.edf_h, d.edf_log_a = R.edf_log_a;
+  d.chi2_per_dof = R.chi2_per_dof;
+  d.width_exponent_grid = R.exponent_grid;  // step 0's profile (empty unless --width-exponent fit)
+  d.width_exponent_chi2 = R.exponent_chi2;
+  d.width_exponent_chi2_per_dof = R.exponent_chi2_per_dof;
+  d.h_clamped_grid_points = R.h_clamped;
+  d.cv_rms_H = R.cv_rms, d.cv_in_sample_rms_H = R.cv_in_sample_rms, d.wall_seconds = R.wall_seconds;
+  for (const WidthResiduals& w : R.residuals) {
+    d.residual_files.push_back(w.file);
+    d.residual_groups.push_back(w.group);
+    d.residual_F.push_back(w.F);
+    d.residual_mean.push_back(w.mean);
+    d.residual_mean_z.push_back(w.mean_z);
+    d.residual_rms_z.push_back(w.rms_z);
+    d.residual_mean_smoothed.push_back(w.mean_smoothed);
+    d.residual_points.push_back(w.points);
+  }
+  for (const CrossValidationRun& c : R.cv_runs) {
+    d.cv_files.push_back(c.file);
+    d.cv_run.push_back(c.run);
+    d.cv_rms.push_back(c.rms);
+    d.cv_mean.push_back(c.mean);
+    d.cv_points.push_back(c.points);
+  }
+  return d;
 }
 
 }  // namespace
 
 void write_model_file(const std::string& path, const FitResult& R, const std::vector<FilteredFile>& files,
                       const FitOptions& o, const Scene& scene) {
-  const DragModel& M = R.model;
-  h5::write_atomically(path, MPI_COMM_SELF, [&](h5::File& f) {
-    schema::write_common(f, schema::kDragModel, scene);
-    f.set_attr(
-        "/", "model_form",
-        std::string("beta_bar/beta_micro = c_corr(alpha) [1 - h(phi)/(1 + a(phi) F^n)], F = l_char_m / Delta, "
-                    "Delta = cube root of the fluid cell volume, n = width_exponent (Radl & Sundaresan 2014: n = 1)"));
-    f.set_attr("/", "width_exponent", M.width_exponent);
-    f.set_attr("/", "width_exponent_fitted", std::int64_t{o.fit_width_exponent ? 1 : 0});
-    if (o.fit_width_exponent) {
-      f.set_attr("/", "width_exponent_low", R.width_exponent_low);
-      f.set_attr("/", "width_exponent_high", R.width_exponent_high);
-    }
-    // the calibration: the operator the H data came from and the Delta fitted
-    {
-      const bool grid = o.calibration_operator == CalibrationOperator::TscGrid;
-      f.set_attr("/", "operator", std::string(names_of(o.calibration_operator).model_file));
-      if (grid) f.set_attr("/", "kernel", std::string("tsc"));
-      f.set_attr("/", "curves", std::string("splines"));
-      std::vector<double> delta;
-      std::vector<std::int64_t> across;
-      for (std::size_t i = 0; i < R.data_F.size(); ++i)
-        if (R.data_fitted[i]) delta.push_back(M.l_char_m / R.data_F[i]);
-      for (const FilteredFile& ff : files)
-        for (const WidthSeries& w : ff.widths)
-          if (w.grid && !(w.width_over_cell < o.min_width_over_cell - 1e-9)) across.push_back(w.cells_across);
-      std::sort(delta.begin(), delta.end());
-      delta.erase(std::unique(delta.begin(), delta.end(), [](double a, double b) { return std::abs(a - b) <= 1e-9 * a; }),
-                  delta.end());
-      std::sort(across.begin(), across.end());
-      across.erase(std::unique(across.begin(), across.end()), across.end());
-      std::vector<double> over_dp;
-      for (double x : delta) over_dp.push_back(x / M.diameter_m);
-      if (!delta.empty()) {
-        f.set_attr("/", "calibrated_delta_m", delta);
-        f.set_attr("/", "calibrated_delta_over_dp", over_dp);
-      }
-      if (grid && !across.empty()) f.set_attr("/", "calibrated_cells_across", across);
-    }
-    write_physical_system(f, M, "base_drag");
-    f.set_attr("/", "u_t_convention", M.u_t_convention);
-    f.set_attr("/", "phi_crit", M.phi_crit);
-    f.set_attr("/", "phi_max", M.h_spline.upper());
-    f.set_attr("/", "h_max", M.h_max);
-    f.set_attr("/", "log_a_min", M.log_a_min);
-    f.set_attr("/", "log_a_max", M.log_a_max);
-    write_spline(
-        f, "/h", M.h_spline,
-        "S_h(phi); h = clip(S_h(phi), 0, h_max) on [phi_crit, phi_max], h(phi_crit) phi/phi_crit below, "
-        "h(phi_max) above");
-    write_spline(f, "/log_a", M.log_a_spline,
-                 "S(phi) = log a(phi); a = exp(clip(S(clip(phi, phi_crit, phi_max)), log_a_min, log_a_max))");
-    write_c_corr(f, M.c_corr_a, M.c_corr_k, M.c_corr_source);
-
-    // bands
-    f.create_group("/bands");
-    f.set_attr("/bands", "replicates", static_cast<std::int64_t>(R.replicates));
-    f.set_attr("/bands", "seed", static_cast<std::int64_t>(o.seed));
-    f.set_attr("/bands", "confidence", 0.95);
-    f.set_attr("/bands", "resampling", R.resampling);
-    for (const auto& [name, v] : {std::pair<const char*, const std::vector<double>*>{"phi", &R.band_phi},
-                                  {"h", &R.h},
-                                  {"h_low", &R.h_low},
-                                  {"h_high", &R.h_high},
-                                  {"a", &R.a},
-                                  {"a_low", &R.a_low},
-                                  {"a_high", &R.a_high},
-                                  {"F", &R.band_F}})
-      write_vector(f, std::string("/bands/") + name, *v);
-    const std::vector<std::uint64_t> dims{R.band_F.size(), R.band_phi.size()};
-    f.write_replicated("/bands/H", R.H, dims);
-    f.write_replicated("/bands/H_low", R.H_low, dims);
-    f.write_replicated("/bands/H_high", R.H_high, dims);
-
-    // per-bin estimates (the data points of the paper's Figure 1)
-    f.create_group("/bins");
-    std::vector<double> phi, center, h, se_h, a, se_log_a, chi2, boot_se_h, boot_se_log_a;
-    std::vector<std::int64_t> used, widths, at_bound, a_at_cap;
-    for (const BinEstimate& b : R.bins) {
-      phi.push_back(b.phi);
-      center.push_back(b.phi_center);
-      h.push_back(b.used ? b.h : NAN);
-      se_h.push_back(b.used ? b.se_h : NAN);
-      a.push_back(b.used ? std::exp(b.log_a) : NAN);
-      se_log_a.push_back(b.used ? b.se_log_a : NAN);
-      chi2.push_back(b.used ? b.chi2 : NAN);
-      boot_se_h.push_back(b.used ? b.boot_se_h : NAN);
-      boot_se_log_a.push_back(b.used ? b.boot_se_log_a : NAN);
-      used.push_back(b.used ? 1 : 0);
-      widths.push_back(b.widths);
-      at_bound.push_back(b.used && b.at_bound ? 1 : 0);
-      a_at_cap.push_back(b.used && b.a_at_cap ? 1 : 0);
-    }
-    for (const auto& [name, v] : {std::pair<const char*, const std::vector<double>*>{"phi", &phi},
-                                  {"phi_center", &center},
-                                  {"h", &h},
-                                  {"h_stderr", &se_h},
-                                  {"a", &a},
-                                  {"log_a_stderr", &se_log_a},
-                                  {"chi2", &chi2},
-                                  {"h_stderr_bootstrap", &boot_se_h},
-                                  {"log_a_stderr_bootstrap", &boot_se_log_a}})
-      write_vector(f, std::string("/bins/") + name, *v);
-    f.write_replicated("/bins/used", used, {used.size()});
-    f.write_replicated("/bins/widths", widths, {widths.size()});
-    f.write_replicated("/bins/at_bound", at_bound, {at_bound.size()});
-    f.write_replicated("/bins/a_at_cap", a_at_cap, {a_at_cap.size()});
-
-    // the data as fitted (H of every width of every file per bin)
-    if (!R.data_F.empty()) {
-      f.create_group("/data");
-      f.set_attr("/data", "series", R.data_series);
-      write_vector(f, "/data/F", R.data_F);
-      write_vector(f, "/data/phi", R.data_phi);
-      const std::vector<std::uint64_t> ddims{R.data_F.size(), R.data_phi.size()};
-      f.write_replicated("/data/H", R.data_H, ddims);
-      f.write_replicated("/data/H_sigma", R.data_sigma, ddims);
-      f.write_replicated("/data/fitted", R.data_fitted, {R.data_fitted.size()});
-    }
-
-    // diagnostics
-    const std::string d = "/diagnostics";
-    f.create_group(d);
-    f.set_attr(d, "min_count", o.min_count);
-    f.set_attr(d, "min_widths", static_cast<std::int64_t>(o.min_widths));
-    f.set_attr(d, "min_width_over_cell", o.min_width_over_cell);
-    f.set_attr(d, "breakpoints", static_cast<std::int64_t>(R.breakpoints));
-    f.set_attr(d, "lambda_h", R.lambda_h);
-    f.set_attr(d, "lambda_log_a", R.lambda_log_a);
-    f.set_attr(d, "edf_h", R.edf_h);
-    f.set_attr(d, "edf_log_a", R.edf_log_a);
-    f.set_attr(d, "chi2_per_dof", R.chi2_per_dof);
-    if (!R.exponent_grid.empty()) {  // step 0's profile
-      write_vector(f, d + "/width_exponent_grid", R.exponent_grid);
-      write_vector(f, d + "/width_exponent_chi2", R.exponent_chi2);
-      f.set_attr(d, "width_exponent_chi2_per_dof", R.exponent_chi2_per_dof);
-    }
-    f.set_attr(d, "h_clamped_grid_points", static_cast<std::int64_t>(R.h_clamped));
-    f.set_attr(d, "cv_rms_H", R.cv_rms);
-    f.set_attr(d, "cv_in_sample_rms_H", R.cv_in_sample_rms);
-    f.set_attr(d, "wall_seconds", R.wall_seconds);
-    std::vector<std::string> rfile, rgroup, cfile;
-    std::vector<double> rF, rmean, rz, rrms, rsm, crms, cmean;
-    std::vector<std::int64_t> rpts, cpts, crun;
-    for (const WidthResiduals& w : R.residuals) {
-      rfile.push_back(w.file);
-      rgroup.push_back(w.group);
-      rF.push_back(w.F);
-      rmean.push_back(w.mean);
-      rz.push_back(w.mean_z);
-      rrms.push_back(w.rms_z);
-      rsm.push_back(w.mean_smoothed);
-      rpts.push_back(w.points);
-    }
-    f.set_attr(d, "residual_files", rfile);
-    f.set_attr(d, "residual_groups", rgroup);
-    write_vector(f, d + "/residual_F", rF);
-    write_vector(f, d + "/residual_mean", rmean);
-    write_vector(f, d + "/residual_mean_z", rz);
-    write_vector(f, d + "/residual_rms_z", rrms);
-    write_vector(f, d + "/residual_mean_smoothed", rsm);
-    f.write_replicated(d + "/residual_points", rpts, {rpts.size()});
-    for (const CrossValidationRun& c : R.cv_runs) {
-      cfile.push_back(c.file);
-      crun.push_back(c.run);
-      crms.push_back(c.rms);
-      cmean.push_back(c.mean);
-      cpts.push_back(c.points);
-    }
-    if (!R.cv_runs.empty()) {
-      f.set_attr(d, "cv_files", cfile);
-      f.write_replicated(d + "/cv_run", crun, {crun.size()});
-      write_vector(f, d + "/cv_rms", crms);
-      write_vector(f, d + "/cv_mean", cmean);
-      f.write_replicated(d + "/cv_points", cpts, {cpts.size()});
-    }
-
-    write_sources(f, files);
-  });
+  DragModelFile m = model_record(
+      R.model,
+      "beta_bar/beta_micro = c_corr(alpha) [1 - h(phi)/(1 + a(phi) F^n)], F = l_char_m / Delta, "
+      "Delta = cube root of the fluid cell volume, n = width_exponent (Radl & Sundaresan 2014: n = 1)",
+      "S_h(phi); h = clip(S_h(phi), 0, h_max) on [phi_crit, phi_max], h(phi_crit) phi/phi_crit below, "
+      "h(phi_max) above",
+      "S(phi) = log a(phi); a = exp(clip(S(clip(phi, phi_crit, phi_max)), log_a_min, log_a_max))");
+  m.calibration_operator = o.calibration_operator;
+  m.curves = schema::ModelCurves::Splines;
+  m.width_exponent_fitted = o.fit_width_exponent;
+  m.width_exponent_low = R.width_exponent_low;
+  m.width_exponent_high = R.width_exponent_high;
+  set_calibration(m, R, files, o);
+  m.bands = bands_of(R, o);
+  m.bins = bins_of(R);
+  if (!R.data_F.empty())
+    m.data = DragModelFile::Data{R.data_series, R.data_F, R.data_phi, R.data_H, R.data_sigma, R.data_fitted};
+  m.diagnostics = diagnostics_of(R, o);
+  set_sources(m, files);
+  schema::write_drag_model(path, scene, m);
 }
 
 std::string write_grid_table_model(const std::string& path, const std::vector<FilteredFile>& files, int cells_across,
@@ -278,53 +202,39 @@ std::string write_grid_table_model(const std::string& path, const std::vector<Fi
     throw InputError(first.path + ": --grid-table " + std::to_string(cells_across) + ": " + std::to_string(phi.size()) +
                      " bin(s) of " + group + " have >= " + std::to_string(min_count) +
                      " samples; a table needs at least 2 (lower --min-count or filter longer runs)");
-  const PhysicalSystem& p = first.physics;
   DragModel M;
-  static_cast<PhysicalSystem&>(M) = p;
-  const double delta = cell_over_dp * p.diameter_m;
-  BSpline h;
-  h.order = 2;
-  h.knots.push_back(phi.front());
-  h.knots.insert(h.knots.end(), phi.begin(), phi.end());
-  h.knots.push_back(phi.back());
-  h.coefficients = H;
-  BSpline log_a = h;
-  log_a.coefficients.assign(H.size(), -700.0);  // a = exp(-700) ~ 1e-304: 0 for any evaluator of the file
-  const double h_max = 0.99;
-  h5::write_atomically(path, MPI_COMM_SELF, [&](h5::File& f) {
-    schema::write_common(f, schema::kDragModel, scene);
-    f.set_attr("/", "model_form",
-               std::string("beta_bar/beta_micro = c_corr(alpha) [1 - H_grid(phi)], H_grid the a-priori filtered drag "
-                           "correction of one coarse grid (curves = table): piecewise linear in phi through the table, "
-                           "constant outside it, clamped to [-1, h_max]; no width dependence (a = 0)"));
-    f.set_attr("/", "curves", std::string("table"));
-    f.set_attr("/", "operator", std::string(names_of(CalibrationOperator::TscGrid).model_file));
-    f.set_attr("/", "kernel", std::string("tsc"));
-    f.set_attr("/", "table_cells_across", static_cast<std::int64_t>(cells_across));
-    f.set_attr("/", "calibrated_delta_m", std::vector<double>{delta});
-    f.set_attr("/", "calibrated_delta_over_dp", std::vector<double>{cell_over_dp});
-    f.set_attr("/", "calibrated_cells_across", std::vector<std::int64_t>{cells_across});
-    f.set_attr("/", "width_exponent", 1.0);
-    f.set_attr("/", "width_exponent_fitted", std::int64_t{0});
-    write_physical_system(f, M, "base_drag");
-    f.set_attr("/", "u_t_convention", std::string(kUtConvention));
-    f.set_attr("/", "phi_crit", phi.front());
-    f.set_attr("/", "phi_max", phi.back());
-    f.set_attr("/", "h_max", h_max);
-    write_spline(f, "/h", h, "H_grid(phi): order-2 B-spline = the piecewise-linear table (knots = the bins' mean phi, "
-                             "coefficients = H_grid); clamped to [-1, h_max], constant outside the knots");
-    write_spline(f, "/log_a", log_a, "log a = -700: a = 0 (the table has no width dependence)");
-    f.create_group("/table");
-    write_vector(f, "/table/phi", phi);
-    write_vector(f, "/table/H", H);
-    write_vector(f, "/table/count", n);
-    f.set_attr("/table", "source_group", group);
-    f.set_attr("/table", "min_count", min_count);
-    // c_corr = 1 (a = 1, k = 0): the table is the grid's a-priori closure alone; what parcels miss is measured
-    // against it, not folded into it
-    write_c_corr(f, 1.0, 0.0, "none");
-    write_sources(f, files);
-  });
+  static_cast<PhysicalSystem&>(M) = first.physics;
+  const double delta = cell_over_dp * M.diameter_m;
+  M.h_spline.order = 2;
+  M.h_spline.knots.push_back(phi.front());
+  M.h_spline.knots.insert(M.h_spline.knots.end(), phi.begin(), phi.end());
+  M.h_spline.knots.push_back(phi.back());
+  M.h_spline.coefficients = H;
+  M.log_a_spline = M.h_spline;
+  M.log_a_spline.coefficients.assign(H.size(), -700.0);  // a = exp(-700) ~ 1e-304: 0 for any evaluator of the file
+  M.h_max = 0.99;
+  M.phi_crit = phi.front();
+  M.width_exponent = 1.0;
+  M.table = true;
+  M.table_cells_across = cells_across;
+  M.calibration_operator = CalibrationOperator::TscGrid;
+  // c_corr = 1 (a = 1, k = 0): the table is the grid's a-priori closure alone; what parcels miss is measured
+  // against it, not folded into it
+  M.c_corr_a = 1.0, M.c_corr_k = 0.0, M.c_corr_source = "none";
+  DragModelFile m = model_record(
+      M,
+      "beta_bar/beta_micro = c_corr(alpha) [1 - H_grid(phi)], H_grid the a-priori filtered drag "
+      "correction of one coarse grid (curves = table): piecewise linear in phi through the table, "
+      "constant outside it, clamped to [-1, h_max]; no width dependence (a = 0)",
+      "H_grid(phi): order-2 B-spline = the piecewise-linear table (knots = the bins' mean phi, "
+      "coefficients = H_grid); clamped to [-1, h_max], constant outside the knots",
+      "log a = -700: a = 0 (the table has no width dependence)");
+  m.calibrated_delta_m = {delta};
+  m.calibrated_delta_over_dp = {cell_over_dp};
+  m.calibrated_cells_across = {cells_across};
+  m.table = DragModelFile::Table{phi, H, n, group, min_count};
+  set_sources(m, files);
+  schema::write_drag_model(path, scene, m);
   std::ostringstream out;
   out << "cgd-fit --grid-table " << cells_across << ": the a-priori H_grid of the grid of " << cells_across
       << " cells across (cell " << format("%.4g", cell_over_dp) << " d_p) as a table model (curves = table, a = 0), "

@@ -13,8 +13,8 @@
 #include <sstream>
 
 #include "core/error.hpp"
-#include "core/h5.hpp"
 #include "core/schema/coarse_summary.hpp"
+#include "core/schema/drag_model.hpp"
 
 namespace cgd::fit {
 
@@ -276,48 +276,35 @@ ParcelFitResult fit_parcel_correction(std::vector<ParcelRun> runs, DragLaw base,
 }
 
 void write_parcel_fit(const std::string& model_path, const std::string& output_path, const ParcelFitResult& r) {
-  h5::update_copy_atomically(model_path, output_path, [&](h5::File& f) {
-    const std::string g = "/c_corr";
-    // the c_corr the model applies: the fitted one, or 1 at every alpha (a = 0, k = 0) when not applied
-    f.set_attr(g, "a", r.applied ? r.a : 0.0);
-    f.set_attr(g, "k", r.applied ? r.k : 0.0);
-    f.set_attr(g, "a_fit", r.a);
-    f.set_attr(g, "k_fit", r.k);
-    f.set_attr(g, "applied", std::int64_t{r.applied ? 1 : 0});
-    f.set_attr(g, "decision", r.decision);
-    f.set_attr(g, "p_value", r.p_value);
-    f.set_attr(g, "dof", static_cast<std::int64_t>(r.dof));
-    f.set_attr(g, "rejected", std::int64_t{r.rejected ? 1 : 0});
-    f.set_attr(g, "k_lower_bound", r.k_lower_bound);
-    f.set_attr(g, "source", std::string("parcel-fit"));
-    f.set_attr(g, "fitted", std::int64_t{1});
-    f.set_attr(g, "k_interval", std::vector<double>{r.k_low, r.k_high});
-    f.set_attr(g, "a_interval", std::vector<double>{r.a_fitted ? r.a_low : 0.0, r.a_high});
-    f.set_attr(g, "a_fitted", std::int64_t{r.a_fitted ? 1 : 0});
-    f.set_attr(g, "chi2_per_dof", r.chi2_per_dof);
-    f.set_attr(g, "method",
-               std::string("c needed per run = beta_m(phi, s) s / (beta_m(phi, s_ref) s_ref) from coarse runs with "
-                           "c_corr off, realisations of one (phi, alpha) pooled, normalised by the alpha = 1 runs of the same phi; "
-                           "weighted least squares with k >= k_lower_bound (c_corr(alpha_max) <= 3); 95 % intervals from "
-                           "a parametric bootstrap; a kept only when its interval excludes 0; applied only when k's "
-                           "interval excludes 0 and the chi2 p-value is >= 0.001"));
-    std::vector<std::string> dirs;
-    std::vector<double> alpha, phi, factor, factor_se, seeds;
-    for (const ParcelRun& p : r.runs) {
-      dirs.push_back(p.run_dir);
-      seeds.push_back(p.seed);
-      alpha.push_back(p.parcel_size);
-      phi.push_back(p.solids_fraction);
-      factor.push_back(p.factor);
-      factor_se.push_back(p.factor_se);
-    }
-    f.set_attr(g, "runs", dirs);
-    f.set_attr(g, "runs_alpha", alpha);
-    f.set_attr(g, "runs_phi", phi);
-    f.set_attr(g, "runs_factor", factor);
-    f.set_attr(g, "runs_factor_stderr", factor_se);
-    f.set_attr(g, "runs_seed", seeds);
-  });
+  schema::DragModelFile::CCorr c;
+  // the c_corr the model applies: the fitted one, or 1 at every alpha (a = 0, k = 0) when not applied
+  c.a = r.applied ? r.a : 0.0;
+  c.k = r.applied ? r.k : 0.0;
+  c.source = "parcel-fit";
+  c.fitted = true;
+  schema::DragModelFile::CCorr::ParcelFit p;
+  p.a_fit = r.a, p.k_fit = r.k, p.p_value = r.p_value, p.k_lower_bound = r.k_lower_bound;
+  p.chi2_per_dof = r.chi2_per_dof, p.dof = r.dof;
+  p.applied = r.applied, p.rejected = r.rejected, p.a_fitted = r.a_fitted;
+  p.decision = r.decision;
+  p.method =
+      "c needed per run = beta_m(phi, s) s / (beta_m(phi, s_ref) s_ref) from coarse runs with "
+      "c_corr off, realisations of one (phi, alpha) pooled, normalised by the alpha = 1 runs of the same phi; "
+      "weighted least squares with k >= k_lower_bound (c_corr(alpha_max) <= 3); 95 % intervals from "
+      "a parametric bootstrap; a kept only when its interval excludes 0; applied only when k's "
+      "interval excludes 0 and the chi2 p-value is >= 0.001";
+  p.k_interval = {r.k_low, r.k_high};
+  p.a_interval = {r.a_fitted ? r.a_low : 0.0, r.a_high};
+  for (const ParcelRun& run : r.runs) {
+    p.runs.push_back(run.run_dir);
+    p.runs_seed.push_back(run.seed);
+    p.runs_alpha.push_back(run.parcel_size);
+    p.runs_phi.push_back(run.solids_fraction);
+    p.runs_factor.push_back(run.factor);
+    p.runs_factor_stderr.push_back(run.factor_se);
+  }
+  c.parcel_fit = std::move(p);
+  schema::write_c_corr_copy(model_path, output_path, c);
 }
 
 std::string parcel_fit_report(const ParcelFitResult& r) {

@@ -6,7 +6,13 @@ path components written as `name` on a docs/schema-*.md page, the schema the too
 What counts as a lookup in an h5py object: a subscript, .get() or `in` test on a variable of the names the tools
 use for files, groups and attribute sets (f, g, h, s, a, p, b, t, c, d, ps, grp, sn, runs) or on `.attrs`,
 with a constant string, unless the same file also stores that key into a dict of its own (a subscript
-assignment or a dict literal: the tools' in-memory rows). Run by CTest (schema_tool_names).
+assignment or a dict literal: the tools' in-memory rows).
+
+The same check for the C++ schema layer (core/schema/<format>.cpp, the one code that names file contents): every
+attribute and dataset name it spells -- a name constant (constexpr const char* kX = "name"), a row of a name table
+({"name", &Struct::member}), a literal path ("/bins/phi_edges") or a name given to set_attr, has_attr, attr_*,
+finite_attr(s), require_attr or child -- is named on a docs/schema-*.md page, so that a name changed in the code
+without its page fails here. Run by CTest (schema_tool_names).
 """
 import ast
 import os
@@ -58,6 +64,32 @@ def lookups(path):
     return found
 
 
+SCHEMA_SOURCES = ("coarse_summary.cpp", "filtered.cpp", "drag_model.cpp")
+NAME = r"[A-Za-z_][A-Za-z0-9_]*"
+SCHEMA_PATTERNS = [
+    re.compile(r"constexpr const char\* k\w+ = \"(/?" + NAME + r"(?:/" + NAME + r")*)\";"),
+    re.compile(r"\{\s*\"(" + NAME + r")\",\s*&"),
+    re.compile(r"\"(/" + NAME + r"(?:/" + NAME + r")*)\""),
+    re.compile(r"\b(?:set_attr|has_attr|attr_\w+|finite_attrs?|require_attr|child)\([^,()]+,\s*\"(" + NAME + r")\""),
+]
+
+
+def schema_names(path):
+    """(line, name) of every file-content name a core/schema/ source spells."""
+    found = []
+    for number, line in enumerate(open(path, encoding="utf-8"), 1):
+        if line.lstrip().startswith("//"):
+            continue
+        for pattern in SCHEMA_PATTERNS:
+            found.extend((number, m.group(1)) for m in pattern.finditer(line))
+    return sorted(set(found))
+
+
+def documented(part, names):
+    # a prefix such as "width_" (of /width_<k>) stands for the names it begins
+    return part in names or (part.endswith("_") and any(n.startswith(part) for n in names))
+
+
 def main():
     names = documented_names()
     tools = os.path.join(ROOT, "tools")
@@ -70,6 +102,19 @@ def main():
             if missing:
                 problems.append(f"{os.path.relpath(path, ROOT)}:{line}: reads '{key}', and no docs/schema-*.md page "
                                 f"names {', '.join(missing)}")
+    schema_count = 0
+    for source in SCHEMA_SOURCES:
+        path = os.path.join(ROOT, "core", "schema", source)
+        for line, key in schema_names(path):
+            schema_count += 1
+            missing = [part for part in key.split("/") if part and not documented(part, names)]
+            if missing:
+                problems.append(f"{os.path.relpath(path, ROOT)}:{line}: writes or reads '{key}', and no docs/schema-*.md "
+                                f"page names {', '.join(missing)}")
+    print(f"tool_names: {schema_count} names in the schema layer ({', '.join(SCHEMA_SOURCES)})")
+    if schema_count < 150:
+        print("FAIL: found fewer than 150 names in core/schema/: the patterns of this test are out of date")
+        return 1
     for p in problems:
         print(p)
     print(f"tool_names: {count} lookups in {len(files)} tools: {'OK' if not problems else str(len(problems)) + ' not in the schema'}")
