@@ -4,7 +4,7 @@
 //   prepare()  refresh ghosts, or rebuild (wrap, migrate, sort, ghosts, list) when due
 //   advance()  force pass: the force on every particle with neighbours (integrator.hpp)
 //   [output of step n: x_n and v_n = (v_{n-1/2} + v_{n+1/2})/2, v_{n+1/2} formed from the forces]
-//   commit()   integration pass in place, reduce the displacement bound, detect blow-ups
+//   commit()   integration pass in place (each particle checked against its anchor's reach), detect blow-ups
 //
 // Neighbour lists (issue 25): each particle carries its own half-skin h_i, set at every full rebuild from
 // its own speed (DemSettings: h_i = target steps x dt x |v_i|, clamped; a fixed skin gives every particle

@@ -157,14 +157,15 @@ TEST(DemMpi, UnevenSlabsAndLongMigrationsMatchSerialRunBitForBit) {
   EXPECT_EQ(differing, 0) << "of " << n << " particles after 600 steps on " << size << " uneven slabs";
 }
 
-// The adaptive skin (sim/dem/system.hpp DemSettings::skin_target_steps): the skin follows the fastest
-// particle, a global maximum, so every rank takes the same skin and rebuilds at the same steps, and the run
-// on all ranks equals the serial one bit for bit, as with a fixed skin. (Against a fixed-skin run the
+// The adaptive skins (sim/dem/system.hpp DemSettings::skin_target_steps): each particle's skin follows its
+// own speed and the rebuild predicate is exact per particle (a ghost's skin comes from the same bits as its
+// owner's), so every rank count rebuilds at the same steps, and the run on all ranks equals the serial one bit
+// for bit, as with a fixed skin. (Against a fixed-skin run the
 // trajectories differ at round-off: positions are wrapped into the box at each rebuild, and x - L rounds
 // differently at another step; in this frictional gas the round-off then grows like any perturbation.)
-// The gas (0.5 m/s rms, its fastest particles ~1.5 m/s; dt = t_c/50 = 7.2e-7 s) asks for
-// 2 * 20 * dt * v_max ~ 0.5 d, so the adaptive run must rebuild less often than the fixed one (checked:
-// otherwise the skin would not have moved) and end with a skin inside its bounds.
+// The gas (0.5 m/s rms, its fastest particles ~1.5 m/s; dt = t_c/50 = 7.2e-7 s) asks for pair skins of
+// up to 2 * 20 * dt * v ~ 0.5 d, so the adaptive run must rebuild less often than the fixed one (checked:
+// otherwise the skins would not have moved) and end with its largest skin inside its bounds.
 TEST(DemMpi, AdaptiveSkinMatchesSerialRunBitForBit) {
   const double d = 75e-6;
   const std::array<double, 3> box{12 * d, 24 * d, 12 * d};
