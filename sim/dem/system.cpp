@@ -118,14 +118,6 @@ void DemSystem::full_rebuild() {
   if (list_valid_ && p_.rotation) list_.save_history(p_, store_);
   for (std::size_t i = 0; i < p_.n_owned; ++i) slabs_.wrap(&p_.x[3 * i]);
   ghosts_.migrate(p_, store_);
-  {
-    // the largest half-skin (of the fastest particle on any rank: a maximum, the same on every rank count)
-    // sets the binning and the ghost shell
-    double v2 = 0;
-    for (std::size_t i = 0; i < p_.n_owned; ++i) v2 = std::max(v2, dot(load3(&p_.v[3 * i]), load3(&p_.v[3 * i])));
-    MPI_Allreduce(MPI_IN_PLACE, &v2, 1, MPI_DOUBLE, MPI_MAX, slabs_.comm());
-    skin_m_ = 2.0 * half_skin(std::sqrt(v2));
-  }
   if (last_sort_step_ < 0 || step_ - last_sort_step_ >= s_.sort_interval_steps) {
     // Reorder owned particles by cell for memory locality. Results do not depend on the order.
     const std::vector<std::int32_t> order = spatial_order(p_, cutoff());
@@ -154,7 +146,13 @@ void DemSystem::full_rebuild() {
     if (has_store) store_ = std::move(sorted_store);
     last_sort_step_ = step_;
   }
-  set_anchors();
+  {
+    // the largest half-skin (of the fastest particle on any rank: a maximum, the same on every rank count)
+    // sets the binning and the ghost shell (the reordering above binned by the last build's)
+    double largest = set_anchors();
+    MPI_Allreduce(MPI_IN_PLACE, &largest, 1, MPI_DOUBLE, MPI_MAX, slabs_.comm());
+    skin_m_ = 2.0 * largest;
+  }
   if (s_.contacts) build_ghosts_and_list(false);
   else classify(nullptr);
   rebuild_due_ = false;
@@ -182,26 +180,33 @@ double DemSystem::half_skin(double speed) const {
   return std::clamp(static_cast<double>(s_.skin_target_steps) * s_.dt_s * speed, 0.5 * skin_min_m_, 0.5 * skin_max_m_);
 }
 
-void DemSystem::set_anchors() {
+double DemSystem::set_anchors() {
   anchor_.resize(4 * p_.n_owned);
+  if (s_.contacts) half_skin_.resize(p_.n_owned);  // the ghosts' follow in build_ghosts_and_list
+  double largest = 0;
   for (std::size_t i = 0; i < p_.n_owned; ++i) {
     const V3 v = load3(&p_.v[3 * i]);
+    const double h = half_skin(std::sqrt(dot(v, v)));
+    largest = std::max(largest, h);
     for (int c = 0; c < 3; ++c) anchor_[4 * i + c] = static_cast<float>(p_.x[3 * i + c]);
-    anchor_[4 * i + 3] = float_down(half_skin(std::sqrt(dot(v, v))) - anchor_margin_m_);
+    anchor_[4 * i + 3] = float_down(h - anchor_margin_m_);
+    if (s_.contacts) half_skin_[i] = float_up(h);
   }
+  return largest;
 }
 
 void DemSystem::build_ghosts_and_list(bool mid_interval) {
   // mid interval: each side of a pair may have moved up to skin/2 and may move up to skin/2 more (its reach
-  // twice), so every particle is given the half-skin `skin`; otherwise its own, from the speed it has now --
-  // a ghost's from the same bits its owner's comes from (the ghost was copied at this build)
+  // twice), so every particle is given the half-skin `skin`; otherwise its own: the owned particles' from
+  // set_anchors, a ghost's from the speed it has now, the same bits its owner's came from (the ghost was
+  // copied at this build)
   const double shell = s_.diameter_m + (mid_interval ? 2.0 : 1.0) * skin_m_;
   ghosts_.build(p_, shell);
   half_skin_.resize(p_.n_total);
   if (mid_interval) {
     std::fill(half_skin_.begin(), half_skin_.end(), float_up(skin_m_));
   } else {
-    for (std::size_t i = 0; i < p_.n_total; ++i) {
+    for (std::size_t i = p_.n_owned; i < p_.n_total; ++i) {
       const V3 v = load3(&p_.v[3 * i]);
       half_skin_[i] = float_up(half_skin(std::sqrt(dot(v, v))));
     }

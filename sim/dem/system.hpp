@@ -162,8 +162,9 @@ class DemSystem {
   void build_ghosts_and_list(bool mid_interval);
   /// A particle's half-skin for its speed (fixed skin: half of it).
   double half_skin(double speed) const;
-  /// Anchors of the owned particles at a full rebuild (their positions and reaches now).
-  void set_anchors();
+  /// Anchors of the owned particles at a full rebuild (their positions and reaches now) and, with contacts,
+  /// their half-skins for the list build; returns this rank's largest half-skin.
+  double set_anchors();
   /// After a list build (nullptr: no contacts): the rows with neighbours, the particles some list refers
   /// to (and the ghosts forward() keeps), zero forces; a new free-flight selection is due.
   void classify(const NeighborList* list);
