@@ -36,9 +36,7 @@ void write_run_checkpoint(const std::string& path, MPI_Comm comm, const Scene& s
   rows.contact_rows = static_cast<std::int64_t>(store.partner.size());
   rows.partner = store.partner.data();
   rows.spring = store.xi.data();
-  // before the first list build there are no anchors yet (the restart then rebuilds: rebuild_due): zeros
-  const std::vector<float> no_anchors(dem.anchors().size() == 4 * p.n_owned ? 0 : 4 * p.n_owned, 0.0f);
-  rows.anchor = no_anchors.empty() ? dem.anchors().data() : no_anchors.data();
+  rows.anchor = dem.anchors().data();  // 4 per owned particle (zero reach before the first build)
   checkpoint::FluidRows fluid_rows;
   if (coupled) fluid_rows = coupled->checkpoint_rows();
   checkpoint::write(path, comm, scene, state, rows, coupled ? &fluid_rows : nullptr);

@@ -72,6 +72,7 @@ void DemSystem::set_particles(std::vector<std::int64_t> ids, std::vector<double>
   }
   store_.clear();
   store_.offset.assign(n + 1, 0);
+  anchor_.assign(4 * n, 0.0f);  // no reach until the first build (which is due): a checkpoint now says so
   list_valid_ = false;
   rebuild_due_ = true;
   dormant_.clear();

@@ -12,6 +12,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -456,4 +457,30 @@ TEST_F(OutputTest, CheckpointRoundTripKeepsRunStateParticlesContactsAndFluid) {
   std::vector<double> pressure(2);
   reader.read_fluid_field(3, 1, 2, pressure.data());  // "pressure", cells 1 and 2
   EXPECT_EQ(pressure, (std::vector<double>{4.5, 5.5}));
+}
+
+// The neighbour-list anchors (checkpoint version 3) are validated like the rest: a NaN or a negative reach is
+// refused, naming the file, the dataset and the row (a restart must not trust a list bound it cannot hold).
+TEST_F(OutputTest, CheckpointWithANonFiniteOrNegativeAnchorIsRefusedNamingTheRow) {
+  const cgd::Scene scene = test_scene();
+  cgd::checkpoint::RunState state;
+  state.placement_method = "random sequential addition";
+  const std::vector<std::int64_t> id{0, 1}, contact_count{0, 0}, partner;
+  const std::vector<double> x{0.1, 0.2, 0.3, 1.1, 1.2, 1.3}, v(6, 0.0), spring;
+  for (const float bad : {std::numeric_limits<float>::quiet_NaN(), -1e-6f}) {
+    const std::vector<float> anchor{0.1f, 0.2f, 0.3f, 1e-6f, 1.1f, 1.2f, 1.3f, bad};
+    cgd::checkpoint::ParticleRows rows{2, id.data(), x.data(), v.data(), nullptr, contact_count.data(), 0,
+                                       partner.data(), spring.data(), anchor.data()};
+    const std::string path = (dir_ / "anchor.h5").string();
+    cgd::checkpoint::write(path, MPI_COMM_WORLD, scene, state, rows, nullptr);
+    try {
+      cgd::checkpoint::Reader reader(path, MPI_COMM_WORLD);
+      ADD_FAILURE() << "a checkpoint with the anchor value " << bad << " was read";
+    } catch (const cgd::InputError& e) {
+      const std::string what = e.what();
+      EXPECT_NE(what.find(path), std::string::npos) << what;
+      EXPECT_NE(what.find("/particles/list_anchor"), std::string::npos) << what;
+      EXPECT_NE(what.find("row 1"), std::string::npos) << what;
+    }
+  }
 }
