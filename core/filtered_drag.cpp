@@ -134,7 +134,8 @@ FilteredDragSetup filtered_drag_setup(const Scene& scene, const Vec3& cell_spaci
   FilteredDragSetup setup;
   if (!scene.fluid || (scene.fluid->drag != DragLaw::Radl2014 && scene.fluid->drag != DragLaw::Model))
     return setup;
-  setup.filter_width_m = std::cbrt(cell_spacing_m[0] * cell_spacing_m[1] * cell_spacing_m[2]);
+  setup.filter_width_m =
+      scene.fluid->filter_to_grid_ratio * std::cbrt(cell_spacing_m[0] * cell_spacing_m[1] * cell_spacing_m[2]);
   setup.l_char_m = scene.derived.l_char_m;
   setup.parcel_size = scene.particles.parcel_size;
   setup.parcel_correction = scene.fluid->parcel_correction;
@@ -168,11 +169,11 @@ std::vector<std::string> model_calibration_warnings(const DragModel& m, double d
   if (m.table) {
     if (std::abs(delta_m - *lo) > 1e-6 * *lo)
       out.push_back(m.path + " is the a-priori H_grid table of the grid of " + std::to_string(m.table_cells_across) +
-                    " cells across (cell " + number(*lo / d) + " d_p), but this run's cell is " + number(delta_m / d) +
+                    " cells across (cell " + number(*lo / d) + " d_p), but this run's Delta (its cell times fluid.filter_to_grid_ratio) is " + number(delta_m / d) +
                     " d_p: the table is applied unchanged (it has no width dependence)");
   } else if (delta_m < *lo * (1 - 1e-6) || delta_m > *hi * (1 + 1e-6)) {
     out.push_back(m.path + " was calibrated on coarse grids of cell " + number(*lo / d) + " to " + number(*hi / d) +
-                  " d_p (operator tsc-grid), and this run's cell of " + number(delta_m / d) +
+                  " d_p (operator tsc-grid), and this run's Delta (its cell times fluid.filter_to_grid_ratio) of " + number(delta_m / d) +
                   " d_p lies outside: the width dependence 1/(1 + a F^n) is extrapolated");
   }
   return out;

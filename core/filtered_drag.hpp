@@ -160,7 +160,7 @@ struct FilteredDrag {
 /// DragLaw::Model), the filter width Delta and L_char that give F, and the parcel size alpha.
 struct FilteredDragSetup {
   std::shared_ptr<const DragModel> model;  // required for DragLaw::Model
-  double filter_width_m = 0;               // Delta: cube root of the fluid cell volume
+  double filter_width_m = 0;               // Delta: fluid.filter_to_grid_ratio x cube root of the cell volume
   double l_char_m = 0;                     // L_char of the run (docs/models.md convention)
   double parcel_size = 1;                  // alpha
   bool parcel_correction = true;           // false: c_corr = 1 (fluid.parcel_correction = false)
@@ -170,7 +170,8 @@ struct FilteredDragSetup {
 /// The setup of a run's drag law from its scene, built once before the engine starts: for drag = "model"
 /// the model load_scene read and checked (FluidConfig::drag_model; nothing is read here) and its
 /// calibration against the run's Delta (model_calibration_warnings: kept in `warnings` and printed once
-/// on stderr, by rank 0 of MPI_COMM_WORLD); Delta = cube root of the cell volume (cell_spacing_m),
+/// on stderr, by rank 0 of MPI_COMM_WORLD); Delta = fluid.filter_to_grid_ratio r times the cube root of the
+/// cell volume (cell_spacing_m; r = 1, the paper's Delta = the cell, unless the scene says otherwise),
 /// L_char from the scene's derived scales, alpha = particles.parcel_size. Microscopic laws get an
 /// empty setup. InputError (check_filtered_setup) when the setup is incomplete.
 FilteredDragSetup filtered_drag_setup(const Scene& scene, const Vec3& cell_spacing_m);

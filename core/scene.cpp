@@ -183,6 +183,17 @@ std::optional<FluidConfig> read_fluid(const SceneReader& in, const ToolAccepts& 
     if (auto v = in.boolean("fluid", "pressure_gradient_force")) f.pressure_gradient_force = *v;
     if (auto v = in.boolean("fluid", "parcel_correction")) f.parcel_correction = *v;
     if (auto v = in.boolean("fluid", "drag_own_deposit")) f.drag_own_deposit = *v;
+    if (auto v = in.number("fluid", "filter_to_grid_ratio")) {
+      if (!(*v >= 1.0 && *v <= 16.0))
+        in.fail_value("fluid", "filter_to_grid_ratio",
+                      "must be in [1, 16] (the filter width Delta of a filtered law in fluid cells; 1 = the cell, "
+                      "the paper's rule: docs/closure.md)");
+      f.filter_to_grid_ratio = *v;
+      if (f.drag != DragLaw::Radl2014 && f.drag != DragLaw::Model && f.filter_to_grid_ratio != 1.0)
+        in.fail_value("fluid", "filter_to_grid_ratio",
+                      std::string("is only used by the filtered laws \"radl2014\" and \"model\" (the scene has \"") +
+                          to_string(f.drag) + "\"); remove it");
+    }
     if (auto v = in.string("fluid", "drag_model")) f.drag_model_path = *v;
     if (auto v = in.string("fluid", "drag_model_checksum")) f.drag_model_checksum = *v;
     if (f.drag == DragLaw::Model && f.drag_model_path.empty())

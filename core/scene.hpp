@@ -64,6 +64,10 @@ struct FluidConfig {
   // the drag law's phi at a particle includes the particle's own deposit (true, the usual CFD-DEM); false: that
   // share, V_p alpha^3 sum_c w_c^2 / V_cell, is taken out of it (issue 28's diagnostic of the parcels' self-bias)
   bool drag_own_deposit = true;
+  // filtered laws (radl2014, model): the filter width Delta at which the correction is evaluated, in units of the
+  // cube root of the fluid cell volume (docs/closure.md "A filter wider than the cell"): 1, the paper's rule
+  // Delta = the cell; r > 1, the correction of the structures a coarse grid cannot build up to r cells
+  double filter_to_grid_ratio = 1.0;
   std::string drag_model_path;        // fluid.drag_model: model file of drag = "model" (cgd-fit), as given
   std::string drag_model_checksum;    // its FNV-1a checksum (16 hex digits), recorded in the effective scene
   // drag = "model": the file, read once by load_scene and checked there against the scene's physical

@@ -458,6 +458,31 @@ TEST(FilteredDragEngine, RunRefusesAModelOfAnotherSystem) {
   EXPECT_EQ(setup.model.get(), scene.fluid->drag_model.get());
 }
 
+// fluid.filter_to_grid_ratio = r (issue 28, docs/closure.md "A filter wider than the cell"): a filtered law on
+// cells h is evaluated at Delta = r h, i.e. exactly as the same law on cells r h with r = 1 (the same F, so the
+// same correction bit for bit); r = 1 is the default (Delta = the cell); r < 1, r > 16 and r with a
+// microscopic law are refused naming the key.
+TEST(FilteredDragEngine, FilterToGridRatioEvaluatesTheLawAtAWiderDelta) {
+  const double h = 4 * 75e-6;
+  const cgd::Scene plain = scene_with({"fluid.drag=\"radl2014\""});
+  const cgd::Scene wide = scene_with({"fluid.drag=\"radl2014\"", "fluid.filter_to_grid_ratio=2"});
+  EXPECT_EQ(plain.fluid->filter_to_grid_ratio, 1.0);
+  const cgd::FilteredDragSetup s1 = cgd::filtered_drag_setup(plain, {h, h, h});
+  const cgd::FilteredDragSetup s2 = cgd::filtered_drag_setup(wide, {h, h, h});
+  const cgd::FilteredDragSetup s1_wide_cell = cgd::filtered_drag_setup(plain, {2 * h, 2 * h, 2 * h});
+  EXPECT_DOUBLE_EQ(s2.filter_width_m, 2 * h);
+  for (const double phi : {0.02, 0.1, 0.3}) {
+    const double b1 = cgd::beta_p(DragLaw::Radl2014, kAir, s1, phi, 0.2);
+    const double b2 = cgd::beta_p(DragLaw::Radl2014, kAir, s2, phi, 0.2);
+    EXPECT_EQ(b2, cgd::beta_p(DragLaw::Radl2014, kAir, s1_wide_cell, phi, 0.2)) << "phi " << phi;
+    EXPECT_LT(b2, b1) << "a wider filter must correct more (Radl 2014's H grows with Delta), phi " << phi;
+  }
+  expect_input_error([&] { scene_with({"fluid.drag=\"radl2014\"", "fluid.filter_to_grid_ratio=0.5"}); },
+                     {"fluid.filter_to_grid_ratio", "[1, 16]", "filtered_test.toml"});
+  expect_input_error([&] { scene_with({"fluid.drag=\"beetstra\"", "fluid.filter_to_grid_ratio=2"}); },
+                     {"fluid.filter_to_grid_ratio", "beetstra"});
+}
+
 }  // namespace
 
 // ---- the shipped models (data/models/) ---------------------------------------------------------------
