@@ -1,0 +1,90 @@
+#!/usr/bin/env bash
+# The wide-filter experiment of issue 28 (docs/closure.md "A filter wider than the cell"): does a drag
+# correction measured on a coarser grid than the coarse run's own close the phi-bar-only closure's gap?
+#
+# usage: scripts/closure_wide_filter.sh OUT [PHIS=0.05,0.10] [ALPHAS=3,4,6] [SEEDS=1,2,3] [TABLE_GRIDS=4,3,2]
+#                                           [RATIOS=1,1.5,2]
+#   OUT: a finished `Makefile.pipeline PROFILE=half` output directory (OUT/generate/phi<phi>/DONE for every phi
+#        of PHIS; OUT/fit/model.h5 for the model runs, which are skipped when it is absent).
+# What it runs, on the coarse grid of COARSE_CELLS = 4 cells across (13.25 d_p, the half box's validation grid):
+#   1. cgd-filter of the PHIS runs (from FROM_TREF = 20 t_ref) with --grids TABLE_GRIDS -> OUT/closure_wide/filtered.h5
+#   2. cgd-fit --grid-table G for each G of TABLE_GRIDS -> OUT/closure_wide/perfect_g<G>.h5: the perfect closure of
+#      the grid of G cells across (G = 4: the run's own grid, the usual perfect closure; G = 3, 2: the correction of
+#      a grid 4/3 and 2 times coarser, i.e. Delta = r x the cell with r = 4/G)
+#   3. coarse runs phi<phi>_a<alpha>_g<G>_s<seed> (the table of grid G, c_corr off, as the pipeline's perfect runs)
+#      and phi<phi>_a<alpha>_r<r>_s<seed> (the fitted model at fluid.filter_to_grid_ratio = r), each with the
+#      pipeline's coarse settings (COARSE_SET of the half profile: sampled 40-80 t_ref)
+#   4. the table (tools/closure_wide_table.py): slip error against the resolved run (its 20-50 t_ref slip) per
+#      configuration, mean over the seeds +- their standard error -> OUT/closure_wide/table.md
+# A configuration whose summary.h5 exists is not run again (delete its directory to rerun it).
+# Environment: BUILD (default build), NICE (default 0: a niceness for the coarse runs).
+set -euo pipefail
+repo=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
+out=${1:?usage: closure_wide_filter.sh OUT [PHIS] [ALPHAS] [SEEDS] [TABLE_GRIDS] [RATIOS]}
+IFS=, read -r -a phis <<< "${2:-0.05,0.10}"
+IFS=, read -r -a alphas <<< "${3:-3,4,6}"
+IFS=, read -r -a seeds <<< "${4:-1,2,3}"
+table_grids=${5:-4,3,2}
+IFS=, read -r -a grids <<< "$table_grids"
+IFS=, read -r -a ratios <<< "${6:-1,1.5,2}"
+build=${BUILD:-$repo/build}
+nice_level=${NICE:-0}
+cells=4
+from_tref=20
+mk() { make -s -f "$repo/Makefile.pipeline" PROFILE=half "$@"; }
+base_scene=$(cd "$repo" && mk print-BASE_SCENE)
+box_dp=$(cd "$repo" && mk print-BOX_DP)
+read -r -a coarse_set <<< "$(cd "$repo" && mk print-COARSE_SET)"
+dx=$(python3 -c "print($box_dp/$cells)")
+dir=$out/closure_wide
+mkdir -p "$dir"
+run_dirs=()
+for phi in "${phis[@]}"; do
+  [ -f "$out/generate/phi$phi/DONE" ] || { echo "closure_wide_filter.sh: $out/generate/phi$phi is not a finished run" >&2; exit 2; }
+  run_dirs+=("$out/generate/phi$phi")
+done
+
+if [ ! -f "$dir/filtered.h5" ]; then
+  echo "[closure_wide] filter ${phis[*]} on grids $table_grids" >&2
+  "$build/cgd-filter" "${run_dirs[@]}" --from-tref $from_tref --grids "$table_grids" --force --quiet -o "$dir/filtered.h5"
+fi
+for g in "${grids[@]}"; do
+  [ -f "$dir/perfect_g$g.h5" ] || "$build/cgd-fit" "$dir/filtered.h5" --grid-table "$g" --force -o "$dir/perfect_g$g.h5" \
+    > "$dir/perfect_g$g.report.txt"
+done
+for phi in "${phis[@]}"; do
+  ref=$dir/resolved_phi$phi.h5
+  [ -f "$ref" ] || "$build/cgd-coarse" --summarise "$out/generate/phi$phi" --from-tref $from_tref --force -o "$ref" > /dev/null
+done
+
+coarse() {  # name, extra args...
+  local name=$1 phi=$2 alpha=$3 seed=$4
+  shift 4
+  local run=$dir/$name
+  [ -f "$run/summary.h5" ] && return 0
+  rm -rf "$run"
+  echo "[closure_wide] $name" >&2
+  local sets=()
+  for s in "${coarse_set[@]}"; do sets+=(--set "$s"); done
+  nice -n "$nice_level" "$build/cgd-coarse" "$repo/$base_scene" --quiet "${sets[@]}" \
+    --set particles.solids_fraction="$phi" --set particles.seed="$seed" --set fluid.dx_over_dp="$dx" \
+    --set particles.parcel_size="$alpha" "$@" -o "$run" > "$run.log" 2>&1 ||
+    { echo "[closure_wide] $name failed (log $run.log)" >&2; return 0; }
+}
+for phi in "${phis[@]}"; do
+  for alpha in "${alphas[@]}"; do
+    for seed in "${seeds[@]}"; do
+      for g in "${grids[@]}"; do
+        coarse "phi${phi}_a${alpha}_g${g}_s$seed" "$phi" "$alpha" "$seed" --model "$dir/perfect_g$g.h5" \
+          --set fluid.parcel_correction=false
+      done
+      if [ -f "$out/fit/model.h5" ]; then
+        for r in "${ratios[@]}"; do
+          coarse "phi${phi}_a${alpha}_r${r}_s$seed" "$phi" "$alpha" "$seed" --model "$out/fit/model.h5" \
+            --set fluid.parcel_correction=false --set fluid.filter_to_grid_ratio="$r"
+        done
+      fi
+    done
+  done
+done
+/usr/bin/python3 "$repo/tools/closure_wide_table.py" "$dir" | tee "$dir/table.md"

@@ -1,0 +1,52 @@
+#!/usr/bin/python3
+"""tools/closure_wide_table.py against a table computed by hand (scripts/closure_wide_filter.sh's summary).
+
+Synthetic summaries: resolved <phi> = 0.05 slip 1.00; perfect table of grid 4 (g4) at alpha 3, seeds 1-3 with slips
+0.90, 0.92, 0.94 (errors -10, -8, -6 %: mean -8.0 %, scatter sd 2 %, standard error 2/sqrt(3) = 1.15 %); the model
+at r = 2 at alpha 3, one seed, slip 1.05 +- 0.02 (error +5.0 +- 2.0 %, the run's own error); a directory with
+another name pattern and one at a phi with no reference are ignored. rms per closure: g4 8.0 %, r2 5.0 %.
+usage: /usr/bin/python3 tests/tools/closure_wide_table.py SOURCE_DIR"""
+import os
+import subprocess
+import sys
+import tempfile
+
+import h5py
+
+source = sys.argv[1] if len(sys.argv) > 1 else os.path.join(os.path.dirname(__file__), "..", "..")
+tool = os.path.join(source, "tools", "closure_wide_table.py")
+failures = 0
+
+
+def check(ok, what):
+    global failures
+    print(("ok   " if ok else "FAIL ") + what)
+    failures += not ok
+
+
+def summary(path, slip, se):
+    os.makedirs(os.path.dirname(path), exist_ok=True)
+    with h5py.File(path, "w") as f:
+        f.attrs["slip_over_ut"], f.attrs["slip_stderr"] = slip, se
+
+
+with tempfile.TemporaryDirectory() as d:
+    p = subprocess.run([sys.executable, tool, d], capture_output=True, text=True)
+    check(p.returncode == 1 and "no finished runs" in p.stderr, "an empty directory: exit 1 with a message")
+    summary(os.path.join(d, "resolved_phi0.05.h5"), 1.00, 0.01)
+    for seed, slip in ((1, 0.90), (2, 0.92), (3, 0.94)):
+        summary(os.path.join(d, f"phi0.05_a3_g4_s{seed}", "summary.h5"), slip, 0.005)
+    summary(os.path.join(d, "phi0.05_a3_r2_s1", "summary.h5"), 1.05, 0.02)
+    summary(os.path.join(d, "phi0.10_a3_g4_s1", "summary.h5"), 0.5, 0.01)  # no reference: ignored
+    summary(os.path.join(d, "other_run", "summary.h5"), 0.5, 0.01)  # not the pattern: ignored
+    p = subprocess.run([sys.executable, tool, d], capture_output=True, text=True)
+    out = p.stdout
+    check(p.returncode == 0, f"exit 0 (got {p.returncode}: {p.stderr.strip()})")
+    check("| 0.05 | 1.000 | perfect table of the 4-cell grid | 3 | -8.0 ± 1.2 % | 3 |" in out,
+          "g4: mean -8.0 %, standard error of the mean 1.2 %, 3 seeds")
+    check("| 0.05 | 1.000 | model, r = 2 | 3 | +5.0 ± 2.0 % | 1 |" in out, "r2: one seed, its own error")
+    check("| perfect table of the 4-cell grid | 8.0 % | -8.0 % | 1 |" in out, "rms and worst of g4")
+    check("| model, r = 2 | 5.0 % | +5.0 % | 1 |" in out, "rms and worst of r2")
+    check("0.10" not in out, "a phi without a reference is left out")
+print(f"{failures} failed" if failures else "all passed")
+sys.exit(1 if failures else 0)
