@@ -33,7 +33,14 @@ Per run (means over the window's snapshots; slips over u_t):
   (the +- of the domain slip and the drift: their snapshots' standard deviation over sqrt(count); snapshots
   0.5 t_ref apart are correlated, so it is a lower bound -- the study's batch means give the honest error)
   per phi bin   the particle fraction and the mean local slip s_c of the particles in cells of each phi bin
-                (the conditional slip: the closure's own target, bin by bin).
+                (the conditional slip: the closure's own target, bin by bin);
+  force balance per phi bin: what holds the particles of the bin's cells up, in units of their weight
+                alpha^3 V_p rho_p g, from each particle's own forces in the snapshot: drag
+                beta_p (u_y - v_y) / (rho_p g) (particles/drag_coefficient, particles/fluid_velocity: the force
+                of the run's own drag law, alpha^3 V_p beta_p (u - v)), pressure -dp/dy / (rho_p g) (the whole
+                gradient, as above) and the rest 1 - drag - pressure: contacts and the mean acceleration
+                (~0 over all particles of a stationary run, whose contacts sum to zero). The hypothesis it
+                tests: the coarse run's dense cells are held by another force than the resolved run's.
 
 usage: /usr/bin/python3 tools/closure_diagnostics.py --resolved RUN [--resolved RUN]... [--coarse RUN]...
            --cells N [--from-tref T] [--coarse-from-tref T] [--bin 0.02] [-o PREFIX]
@@ -108,6 +115,8 @@ def snapshot_cells(path, n_cells, from_tref):
             fail(f"{path}: /particles attribute pressure_gradient_mean missing")
         dpdy = (np.asarray(need(f, path, "particles/pressure_gradient", (n, 3))[:, 1], dtype=float) +
                 float(np.asarray(parts.attrs["pressure_gradient_mean"])[1]))
+        beta = np.asarray(need(f, path, "particles/drag_coefficient", (n,))[:], dtype=float)
+        u_p = np.asarray(need(f, path, "particles/fluid_velocity", (n, 3))[:, 1], dtype=float)
         fl = need(f, path, "fluid")
         cells_f = np.asarray(fl.attrs["cells"], dtype=int)
         spacing = np.asarray(fl.attrs["spacing"], dtype=float)
@@ -116,7 +125,8 @@ def snapshot_cells(path, n_cells, from_tref):
         eps = np.asarray(need(f, path, "fluid/void_fraction", shape_f)[:], dtype=float)
         eu = np.asarray(need(f, path, "fluid/eps_velocity", shape_f + (3,))[:, :, :, 1], dtype=float)
         for name, a in (("particles/position", x), ("particles/velocity", v), ("fluid/void_fraction", eps),
-                        ("fluid/eps_velocity", eu)):
+                        ("fluid/eps_velocity", eu), ("particles/pressure_gradient", dpdy),
+                        ("particles/drag_coefficient", beta), ("particles/fluid_velocity", u_p)):
             if not np.all(np.isfinite(a)):
                 fail(f"{path}: /{name} holds non-finite values")
         alpha = float(p["parcel_size"])
@@ -147,7 +157,9 @@ def snapshot_cells(path, n_cells, from_tref):
     eu_c = np.einsum("zk,yj,xi,kji->zyx", wz, wy, wx, eu).reshape(-1)
     cell_volume = float(np.prod(hs))
     fine_volume = float(np.prod(spacing))
+    weight = consts["rho_p"] * consts["g"]  # per unit particle volume
     return dict(flat=flat, solids=solids, momentum=momentum, e=e_c, eu=eu_c, cell_volume=cell_volume,
+                drag_share=beta * (u_p - v[:, 1]) / weight, pressure_share=-dpdy / weight,
                 n=n, v_mean=float(v[:, 1].mean()), dpdy_mean=float(dpdy.mean()),
                 u_domain=float(eu.sum() / eps.sum()), phi_mean=n * vol / float(np.prod(box)),
                 fine_volume=fine_volume, **consts)
@@ -162,7 +174,7 @@ def run_snapshots(run):
 
 def analyse(runs, n_cells, from_tref, bin_width):
     """Pooled figures of one or more runs (their window's snapshots)."""
-    phi_all, slip_all, rows = [], [], []
+    phi_all, slip_all, drag_all, pressure_all, rows = [], [], [], [], []
     for run in runs:
         used = 0
         for path in run_snapshots(run):
@@ -180,6 +192,8 @@ def analyse(runs, n_cells, from_tref, bin_width):
             slip_p = slip_c[snap["flat"]]
             phi_all.append(phi_p)
             slip_all.append(slip_p)
+            drag_all.append(snap["drag_share"])
+            pressure_all.append(snap["pressure_share"])
             domain = (snap["u_domain"] - snap["v_mean"]) / snap["u_t"]
             local = float(np.sum(weight * slip_c))
             weight_mix = (snap["rho_p"] * snap["phi_mean"] + snap["rho_f"] * (1 - snap["phi_mean"])) * snap["g"]
@@ -189,6 +203,8 @@ def analyse(runs, n_cells, from_tref, bin_width):
             fail(f"{run}: no snapshot at or after {from_tref} t_ref")
     phi_p = np.concatenate(phi_all)
     slip_p = np.concatenate(slip_all)
+    drag_p = np.concatenate(drag_all)
+    pressure_p = np.concatenate(pressure_all)
     phi_mean = rows[0]["phi_mean"]
     mean = lambda k: float(np.mean([r[k] for r in rows]))  # noqa: E731
     stderr = lambda k: float(np.std([r[k] for r in rows], ddof=1) / math.sqrt(len(rows))) if len(rows) > 1 else math.nan  # noqa: E731
@@ -198,11 +214,14 @@ def analyse(runs, n_cells, from_tref, bin_width):
     for b in range(len(edges) - 1):
         sel = which == b
         bins.append(dict(lo=edges[b], hi=edges[b + 1], fraction=float(sel.mean()),
-                         slip=float(slip_p[sel].mean()) if sel.any() else math.nan))
+                         slip=float(slip_p[sel].mean()) if sel.any() else math.nan,
+                         drag=float(drag_p[sel].mean()) if sel.any() else math.nan,
+                         pressure=float(pressure_p[sel].mean()) if sel.any() else math.nan))
     return dict(snapshots=len(rows), phi=phi_mean, domain=mean("domain"), domain_err=stderr("domain"),
                 local=mean("local"), drift=mean("drift"), drift_err=stderr("drift"), support=mean("support"),
                 phi_pw=float(phi_p.mean()), phi_std=float(phi_p.std()), phi_p99=float(np.percentile(phi_p, 99)),
-                tail=float(np.mean(phi_p > 2.2 * phi_mean)), bins=bins, phi_p=phi_p)
+                tail=float(np.mean(phi_p > 2.2 * phi_mean)), bins=bins, phi_p=phi_p,
+                drag=float(drag_p.mean()), pressure=float(pressure_p.mean()))
 
 
 def tables(results, n_cells, from_tref, coarse_from_tref=None):
@@ -228,6 +247,23 @@ def tables(results, n_cells, from_tref, coarse_from_tref=None):
         for _, r in results:
             if b < len(r["bins"]) and r["bins"][b]["fraction"] > 0:
                 cells.append(f"{100 * r['bins'][b]['fraction']:.1f} % : {r['bins'][b]['slip']:.3f}")
+            else:
+                cells.append("")
+        if any(cells):
+            out.append(f"| {lo:.2f}-{lo + results[0][1]['bins'][0]['hi']:.2f} | " + " | ".join(cells) + " |")
+    out += ["", "Vertical force balance per phi bin, in units of the particles' weight: drag / pressure / rest "
+            "(contacts and mean acceleration); the first row over all particles", "",
+            "| phi bin | " + " | ".join(label for label, _ in results) + " |",
+            "|---|" + "---|" * len(results)]
+    out.append("| all | " + " | ".join(f"{r['drag']:.2f} / {r['pressure']:.2f} / {1 - r['drag'] - r['pressure']:+.2f}"
+                                        for _, r in results) + " |")
+    for b in range(n_bins):
+        lo = b * (results[0][1]["bins"][0]["hi"] - results[0][1]["bins"][0]["lo"])
+        cells = []
+        for _, r in results:
+            if b < len(r["bins"]) and r["bins"][b]["fraction"] > 0:
+                bn = r["bins"][b]
+                cells.append(f"{bn['drag']:.2f} / {bn['pressure']:.2f} / {1 - bn['drag'] - bn['pressure']:+.2f}")
             else:
                 cells.append("")
         if any(cells):

@@ -7,7 +7,10 @@ x = 3.5 m (wrapped to 1.5: v_y = -0.4); u_t = 1 m/s. Then
   domain slip (8 x 0.6 + 56 x 1.8)/(8 x 0.6 + 56 x 0.9) - 0.05 = 1.913043... - 0.05; drift = domain - 1.2;
   phi (particle-weighted) mean 0.025, std sqrt(0.0007 - 0.025^2); <phi> = 0.005, tail phi > 0.011: 75 %;
   pressure support: G_y = -59.95 (the mixture weight at rho_p 1000, rho_f 1, g 10) plus the particles' own
-  -10, -10, -10, +10 Pa/m: 64.95 / 59.95.
+  -10, -10, -10, +10 Pa/m: 64.95 / 59.95;
+  force balance (beta_p = 1000 kg/(m^3 s), the particles' fluid velocity u_y = 1 m/s, weight rho_p g = 10^4 N/m^3):
+  drag shares 0.09, 0.08, 0.07 (cube 0) and 0.14 (cube 7), pressure shares 0.006995 (x3) and 0.004995, so the
+  phi = 0.01 bin 0.14 / 0.004995, the phi = 0.03 bin 0.08 / 0.006995, all particles 0.095 / 0.006495.
 On one cell the drift is 0 (local slip = domain slip). A snapshot before --from-tref (different numbers)
 must be left out; the fine-to-coarse overlap of a grid that
 does not divide the coarse one (3 fine cells on 2 coarse); the refusals (a missing dataset, cells more than 10 %
@@ -48,6 +51,8 @@ def snapshot(path, time, vy, box=(2.0, 2.0, 2.0), drop=None):
     v[:, 1] = vy
     gp = np.zeros((4, 3))
     gp[:, 1] = [-10, -10, -10, 10]
+    uf = np.zeros((4, 3))
+    uf[:, 1] = 1.0
     with h5py.File(path, "w") as f:
         f.attrs["cgd_format"] = "snapshot"
         f.attrs["time"] = time
@@ -57,7 +62,8 @@ def snapshot(path, time, vy, box=(2.0, 2.0, 2.0), drop=None):
         p["density_kg_m3"], p["fluid_density_kg_m3"], p["gravity_m_s2"] = 1000.0, 1.0, np.array([0.0, -10.0, 0.0])
         parts = f.create_group("particles")
         parts.attrs["pressure_gradient_mean"] = np.array([0.0, -59.95, 0.0])
-        for name, a in (("position", x), ("velocity", v), ("pressure_gradient", gp)):
+        for name, a in (("position", x), ("velocity", v), ("pressure_gradient", gp), ("fluid_velocity", uf),
+                        ("drag_coefficient", np.full(4, 1000.0))):
             if name != drop:
                 parts[name] = a
         fl = f.create_group("fluid")
@@ -86,6 +92,11 @@ with tempfile.TemporaryDirectory() as tmp:
     check(abs(b0["fraction"] - 0.25) < 1e-12 and abs(b0["slip"] - 2.4) < 1e-12 and
           abs(b1["fraction"] - 0.75) < 1e-12 and abs(b1["slip"] - 0.8) < 1e-12,
           f"per bin: 25 % at slip 2.4, 75 % at 0.8 ({b0}, {b1})")
+    check(abs(b0["drag"] - 0.14) < 1e-12 and abs(b0["pressure"] - 0.004995) < 1e-12 and
+          abs(b1["drag"] - 0.08) < 1e-12 and abs(b1["pressure"] - 0.006995) < 1e-12 and
+          abs(r["drag"] - 0.095) < 1e-12 and abs(r["pressure"] - 0.006495) < 1e-12,
+          f"force balance: drag/pressure 0.14/0.004995 and 0.08/0.006995 per bin, 0.095/0.006495 in all "
+          f"({b0['drag']}, {b0['pressure']}, {b1['drag']}, {b1['pressure']}, {r['drag']}, {r['pressure']})")
     r1 = cd.analyse([run], 1, 1.0, 0.02)  # one cell: the local slip is the domain slip, no drift
     check(abs(r1["drift"]) < 1e-12 and abs(r1["local"] - domain) < 1e-12, f"one cell: drift 0 ({r1['drift']})")
     w = cd.overlap_matrix(3, 2.0 / 3.0, 0.0, 2, 1.0)
@@ -94,7 +105,8 @@ with tempfile.TemporaryDirectory() as tmp:
                          capture_output=True, text=True)
     check(out.returncode == 0 and "| resolved | 1 | 0.005 |" in out.stdout, "the table of the command line")
     for label, kw, cells in (("a missing dataset", {"drop": "eps_velocity"}, "2"),
-                             ("cells far from cubes", {"box": (2.0, 2.5, 2.0)}, "2")):
+                             ("cells far from cubes", {"box": (2.0, 2.5, 2.0)}, "2"),
+                             ("no drag coefficient", {"drop": "drag_coefficient"}, "2")):
         bad = os.path.join(tmp, "bad")
         os.makedirs(os.path.join(bad, "snapshots"), exist_ok=True)
         snapshot(os.path.join(bad, "snapshots", "snap_1.h5"), 2.0, [0.1, 0.2, 0.3, -0.4], **kw)
