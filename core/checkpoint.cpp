@@ -4,8 +4,45 @@
 #include "core/error.hpp"
 #include "core/output.hpp"
 #include "core/schema/check.hpp"
+#include "core/schema/snapshot_names.hpp"
 
 namespace cgd::checkpoint {
+
+namespace {
+
+/// The checkpoint's datasets and attributes (docs/schema-run.md "Checkpoint"), each spelled once; the fluid
+/// fields' names are kFluidFieldNames (core/checkpoint.hpp), the common attributes schema::write_common's.
+constexpr const char* kRoot = "/";
+constexpr const char* kParticles = "/particles";
+constexpr const char* kId = "/particles/id";
+constexpr const char* kPosition = "/particles/position";
+constexpr const char* kVelocity = "/particles/velocity";
+constexpr const char* kAngularVelocity = "/particles/angular_velocity";
+constexpr const char* kContactCount = "/particles/contact_count";
+constexpr const char* kListAnchor = "/particles/list_anchor";  // version 3
+constexpr const char* kContacts = "/contacts";
+constexpr const char* kPartner = "/contacts/partner";
+constexpr const char* kSpring = "/contacts/spring";
+constexpr const char* kFluid = "/fluid";
+constexpr const char* kDtPrevious = "dt_previous";  // of /fluid
+constexpr const char* kFluidSteps = "steps";        // of /fluid
+constexpr const char* kStep = "step";
+constexpr const char* kTime = "time";
+constexpr const char* kRebuildDue = "rebuild_due";
+constexpr const char* kSkin = "skin";
+constexpr const char* kLastSortStep = "last_sort_step";
+constexpr const char* kRanks = "ranks";
+constexpr const char* kRankParticleCounts = "rank_particle_counts";
+constexpr const char* kRankContactCounts = "rank_contact_counts";
+constexpr const char* kWallSeconds = "wall_seconds";
+constexpr const char* kPhaseSeconds = "phase_seconds";
+constexpr const char* kFrameSteps = "frame_steps";
+constexpr const char* kFrameTimes = "frame_times";
+constexpr const char* kFrameCounts = "frame_counts";
+constexpr const char* kPlacementMethod = "placement_method";
+constexpr const char* kNeighborRebuilds = "neighbor_rebuilds";
+
+}  // namespace
 
 void write(const std::string& path, MPI_Comm comm, const Scene& scene, const RunState& state,
            const ParticleRows& particles, const FluidRows* fluid) {
@@ -25,41 +62,41 @@ void write(const std::string& path, MPI_Comm comm, const Scene& scene, const Run
   }
   h5::write_atomically(path, comm, [&](h5::File& file) {
     schema::write_common(file, schema::kCheckpoint, scene);
-    file.set_attr("/", "step", state.step);
-    file.set_attr("/", "time", state.time_s);
-    file.set_attr("/", "rebuild_due", static_cast<std::int64_t>(state.rebuild_due));
-    file.set_attr("/", "skin", state.skin_m);
-    file.set_attr("/", "last_sort_step", state.last_sort_step);
-    file.set_attr("/", "ranks", static_cast<std::int64_t>(ranks));
-    file.set_attr("/", "rank_particle_counts", counts);
-    file.set_attr("/", "rank_contact_counts", contact_counts);
-    file.set_attr("/", "wall_seconds", state.wall_seconds);
-    file.set_attr("/", "phase_seconds", state.phase_seconds);
-    file.set_attr("/", "frame_steps", frame_steps);
-    file.set_attr("/", "frame_times", frame_times);
-    file.set_attr("/", "frame_counts", frame_counts);
-    file.set_attr("/", "placement_method", state.placement_method);
-    file.set_attr("/", "neighbor_rebuilds", state.neighbor_rebuilds);
-    file.create_group("/particles");
-    file.write_rows("/particles/id", particles.id, n, 1);
-    file.write_rows("/particles/position", particles.position, n, 3);
-    file.write_rows("/particles/velocity", particles.velocity, n, 3);
+    file.set_attr(kRoot, kStep, state.step);
+    file.set_attr(kRoot, kTime, state.time_s);
+    file.set_attr(kRoot, kRebuildDue, static_cast<std::int64_t>(state.rebuild_due));
+    file.set_attr(kRoot, kSkin, state.skin_m);
+    file.set_attr(kRoot, kLastSortStep, state.last_sort_step);
+    file.set_attr(kRoot, kRanks, static_cast<std::int64_t>(ranks));
+    file.set_attr(kRoot, kRankParticleCounts, counts);
+    file.set_attr(kRoot, kRankContactCounts, contact_counts);
+    file.set_attr(kRoot, kWallSeconds, state.wall_seconds);
+    file.set_attr(kRoot, kPhaseSeconds, state.phase_seconds);
+    file.set_attr(kRoot, kFrameSteps, frame_steps);
+    file.set_attr(kRoot, kFrameTimes, frame_times);
+    file.set_attr(kRoot, kFrameCounts, frame_counts);
+    file.set_attr(kRoot, kPlacementMethod, state.placement_method);
+    file.set_attr(kRoot, kNeighborRebuilds, state.neighbor_rebuilds);
+    file.create_group(kParticles);
+    file.write_rows(kId, particles.id, n, 1);
+    file.write_rows(kPosition, particles.position, n, 3);
+    file.write_rows(kVelocity, particles.velocity, n, 3);
     if (particles.angular_velocity)
-      file.write_rows("/particles/angular_velocity", particles.angular_velocity, n, 3);
-    file.write_rows("/particles/contact_count", particles.contact_count, n, 1);
+      file.write_rows(kAngularVelocity, particles.angular_velocity, n, 3);
+    file.write_rows(kContactCount, particles.contact_count, n, 1);
     {  // floats, held exactly as doubles
       const std::vector<double> anchor(particles.anchor, particles.anchor + 4 * n);
-      file.write_rows("/particles/list_anchor", anchor.data(), n, 4);
+      file.write_rows(kListAnchor, anchor.data(), n, 4);
     }
-    file.create_group("/contacts");
-    file.write_rows("/contacts/partner", particles.partner, m, 1);
-    file.write_rows("/contacts/spring", particles.spring, m, 3);
+    file.create_group(kContacts);
+    file.write_rows(kPartner, particles.partner, m, 1);
+    file.write_rows(kSpring, particles.spring, m, 3);
     if (fluid) {
-      file.create_group("/fluid");
-      file.set_attr("/fluid", "dt_previous", fluid->dt_previous_s);
-      file.set_attr("/fluid", "steps", fluid->steps);
+      file.create_group(kFluid);
+      file.set_attr(kFluid, kDtPrevious, fluid->dt_previous_s);
+      file.set_attr(kFluid, kFluidSteps, fluid->steps);
       for (std::size_t k = 0; k < kFluidFieldNames.size(); ++k)
-        file.write_rows(std::string("/fluid/") + kFluidFieldNames[k], fluid->fields[k], fluid->cells, 1);
+        file.write_rows(std::string(kFluid) + "/" + kFluidFieldNames[k], fluid->fields[k], fluid->cells, 1);
     }
   }, h5::Seal::Yes);  // a restart must never run on damaged bytes (schema::kCheckpoint)
 }
@@ -79,11 +116,11 @@ Header read_header(const std::string& path, MPI_Comm comm) {
   const h5::File f = h5::File::open_read(path, comm);
   schema::check_format(f, schema::kCheckpoint);
   Header h;
-  h.scene_toml = f.attr_string("/", "scene");
-  h.scene_name = f.attr_string("/params", "scene_name");
-  h.ranks = f.attr_int("/", "ranks");
+  h.scene_toml = f.attr_string(kRoot, schema::names::kScene);
+  h.scene_name = f.attr_string(schema::names::kParams, schema::names::kSceneName);
+  h.ranks = f.attr_int(kRoot, kRanks);
   if (h.ranks < 1)
-    throw InputError(path + ": attribute 'ranks' of '/' is " + std::to_string(h.ranks) + ", expected >= 1");
+    throw InputError(path + ": attribute '" + kRanks + "' of '/' is " + std::to_string(h.ranks) + ", expected >= 1");
   return h;
 }
 
@@ -98,29 +135,29 @@ Reader::Reader(const std::string& path, MPI_Comm comm) : file_(h5::File::open_re
     return v;
   };
   RunState& s = state_;
-  s.step = nonnegative("step", f.attr_int("/", "step"));
-  s.time_s = schema::finite_attr(f, "/", "time");
+  s.step = nonnegative(kStep, f.attr_int(kRoot, kStep));
+  s.time_s = schema::finite_attr(f, kRoot, kTime);
   // versions 1 and 2 held one displacement bound instead of the anchors: not needed, the restart rebuilds
-  s.rebuild_due = f.attr_int("/", "rebuild_due") != 0;
-  if (f.has_attr("/", "skin")) s.skin_m = schema::finite_attr(f, "/", "skin");  // version 1's first files: none
-  s.last_sort_step = nonnegative("last_sort_step", f.attr_int("/", "last_sort_step"));
-  s.neighbor_rebuilds = nonnegative("neighbor_rebuilds", f.attr_int("/", "neighbor_rebuilds"));
-  s.wall_seconds = schema::finite_attr(f, "/", "wall_seconds");
-  s.phase_seconds = schema::finite_attrs(f, "/", "phase_seconds");
-  const auto steps = f.attr_ints("/", "frame_steps");
-  const auto times = schema::finite_attrs(f, "/", "frame_times", steps.size());
-  const auto counts = f.attr_ints("/", "frame_counts");
+  s.rebuild_due = f.attr_int(kRoot, kRebuildDue) != 0;
+  if (f.has_attr(kRoot, kSkin)) s.skin_m = schema::finite_attr(f, kRoot, kSkin);  // version 1's first files: none
+  s.last_sort_step = nonnegative(kLastSortStep, f.attr_int(kRoot, kLastSortStep));
+  s.neighbor_rebuilds = nonnegative(kNeighborRebuilds, f.attr_int(kRoot, kNeighborRebuilds));
+  s.wall_seconds = schema::finite_attr(f, kRoot, kWallSeconds);
+  s.phase_seconds = schema::finite_attrs(f, kRoot, kPhaseSeconds);
+  const auto steps = f.attr_ints(kRoot, kFrameSteps);
+  const auto times = schema::finite_attrs(f, kRoot, kFrameTimes, steps.size());
+  const auto counts = f.attr_ints(kRoot, kFrameCounts);
   if (counts.size() != steps.size())
-    throw InputError(path + ": attribute 'frame_counts' of '/' holds " + std::to_string(counts.size()) +
-                     " values, expected " + std::to_string(steps.size()) + " (one per frame_steps)");
+    throw InputError(path + ": attribute '" + kFrameCounts + "' of '/' holds " + std::to_string(counts.size()) +
+                     " values, expected " + std::to_string(steps.size()) + " (one per " + kFrameSteps + ")");
   for (std::size_t k = 0; k < steps.size(); ++k) s.frames.push_back({steps[k], times[k], counts[k]});
-  s.placement_method = f.attr_string("/", "placement_method");
-  ranks_ = f.attr_int("/", "ranks");
-  if (ranks_ < 1) throw InputError(path + ": attribute 'ranks' of '/' is " + std::to_string(ranks_) + ", expected >= 1");
-  particle_counts_ = f.attr_ints("/", "rank_particle_counts");
-  contact_counts_ = f.attr_ints("/", "rank_contact_counts");
+  s.placement_method = f.attr_string(kRoot, kPlacementMethod);
+  ranks_ = f.attr_int(kRoot, kRanks);
+  if (ranks_ < 1) throw InputError(path + ": attribute '" + kRanks + "' of '/' is " + std::to_string(ranks_) + ", expected >= 1");
+  particle_counts_ = f.attr_ints(kRoot, kRankParticleCounts);
+  contact_counts_ = f.attr_ints(kRoot, kRankContactCounts);
   for (const auto* list : {&particle_counts_, &contact_counts_}) {
-    const char* name = list == &particle_counts_ ? "rank_particle_counts" : "rank_contact_counts";
+    const char* name = list == &particle_counts_ ? kRankParticleCounts : kRankContactCounts;
     if (static_cast<std::int64_t>(list->size()) != ranks_)
       throw InputError(path + ": attribute '" + name + "' of '/' holds " + std::to_string(list->size()) +
                        " values, expected ranks = " + std::to_string(ranks_));
@@ -131,26 +168,26 @@ Reader::Reader(const std::string& path, MPI_Comm comm) : file_(h5::File::open_re
   const auto m = static_cast<std::uint64_t>(sum(contact_counts_));
   const std::string nwhy = "N = " + std::to_string(n) + " particles, the sum of rank_particle_counts";
   const std::string mwhy = "M = " + std::to_string(m) + " contact records, the sum of rank_contact_counts";
-  schema::require_shape(f, "/particles/id", {n}, nwhy);
-  schema::require_shape(f, "/particles/position", {n, 3}, nwhy);
-  schema::require_shape(f, "/particles/velocity", {n, 3}, nwhy);
-  if (f.exists("/particles/angular_velocity")) schema::require_shape(f, "/particles/angular_velocity", {n, 3}, nwhy);
-  schema::require_shape(f, "/particles/contact_count", {n}, nwhy);
-  if (version_ >= 3) schema::require_shape(f, "/particles/list_anchor", {n, 4}, nwhy);
-  schema::require_shape(f, "/contacts/partner", {m}, mwhy);
-  schema::require_shape(f, "/contacts/spring", {m, 3}, mwhy);
-  for (const char* d : {"/particles/id", "/particles/contact_count", "/contacts/partner"})
+  schema::require_shape(f, kId, {n}, nwhy);
+  schema::require_shape(f, kPosition, {n, 3}, nwhy);
+  schema::require_shape(f, kVelocity, {n, 3}, nwhy);
+  if (f.exists(kAngularVelocity)) schema::require_shape(f, kAngularVelocity, {n, 3}, nwhy);
+  schema::require_shape(f, kContactCount, {n}, nwhy);
+  if (version_ >= 3) schema::require_shape(f, kListAnchor, {n, 4}, nwhy);
+  schema::require_shape(f, kPartner, {m}, mwhy);
+  schema::require_shape(f, kSpring, {m, 3}, mwhy);
+  for (const char* d : {kId, kContactCount, kPartner})
     if (!f.is_integer(d))
       throw InputError(path + ": dataset '" + std::string(d) + "' holds floating-point values, expected integers (int64)");
-  if (f.exists("/fluid")) {
-    const double dt = schema::finite_attr(f, "/fluid", "dt_previous");
-    if (dt < 0) throw InputError(path + ": attribute 'dt_previous' of '/fluid' is negative, expected >= 0");
-    nonnegative("steps of /fluid", f.attr_int("/fluid", "steps"));
-    const std::string first = std::string("/fluid/") + kFluidFieldNames[0];
+  if (f.exists(kFluid)) {
+    const double dt = schema::finite_attr(f, kFluid, kDtPrevious);
+    if (dt < 0) throw InputError(path + ": attribute '" + kDtPrevious + "' of '" + kFluid + "' is negative, expected >= 0");
+    nonnegative((std::string(kFluidSteps) + " of " + kFluid).c_str(), f.attr_int(kFluid, kFluidSteps));
+    const std::string first = std::string(kFluid) + "/" + kFluidFieldNames[0];
     const auto dims = schema::require_shape(f, first, {schema::kAnyExtent});
     fluid_cells_ = static_cast<std::int64_t>(dims[0]);
     for (const char* name : kFluidFieldNames)
-      schema::require_shape(f, std::string("/fluid/") + name, {dims[0]},
+      schema::require_shape(f, std::string(kFluid) + "/" + name, {dims[0]},
                             std::to_string(dims[0]) + " cells, as " + first);
   }
   scan_values(comm, static_cast<std::int64_t>(n), static_cast<std::int64_t>(m));
@@ -168,13 +205,13 @@ void Reader::scan_values(MPI_Comm comm, std::int64_t n, std::int64_t m) const {
   std::int64_t contacts = 0;
   try {
     const auto [p0, p1] = slice(n);
-    for (const char* d : {"/particles/position", "/particles/velocity", "/particles/angular_velocity"}) {
+    for (const char* d : {kPosition, kVelocity, kAngularVelocity}) {
       if (!file_.exists(d)) continue;
       const std::vector<double> v = file_.read_rows_double(d, p0, p1 - p0);
       schema::require_finite(path, d, v.data(), v.size(), 3, static_cast<std::size_t>(p0));
     }
     if (version_ >= 3) {
-      const char* d = "/particles/list_anchor";
+      const char* d = kListAnchor;
       const std::vector<double> a = file_.read_rows_double(d, p0, p1 - p0);
       schema::require_finite(path, d, a.data(), a.size(), 4, static_cast<std::size_t>(p0));
       for (std::size_t k = 3; k < a.size(); k += 4)
@@ -182,26 +219,26 @@ void Reader::scan_values(MPI_Comm comm, std::int64_t n, std::int64_t m) const {
           throw InputError(path + ": dataset '" + std::string(d) + "' holds the reach " + std::to_string(a[k]) +
                            " at row " + std::to_string(p0 + static_cast<std::int64_t>(k / 4)) + ", expected >= 0");
     }
-    const std::vector<std::int64_t> id = file_.read_rows_int("/particles/id", p0, p1 - p0);
+    const std::vector<std::int64_t> id = file_.read_rows_int(kId, p0, p1 - p0);
     for (std::size_t i = 0; i < id.size(); ++i)
       if (id[i] < 0)
-        throw InputError(path + ": dataset '/particles/id' holds " + std::to_string(id[i]) + " at row " +
+        throw InputError(path + ": dataset '" + kId + "' holds " + std::to_string(id[i]) + " at row " +
                          std::to_string(p0 + static_cast<std::int64_t>(i)) + ", expected an id >= 0");
-    for (std::int64_t c : file_.read_rows_int("/particles/contact_count", p0, p1 - p0)) {
+    for (std::int64_t c : file_.read_rows_int(kContactCount, p0, p1 - p0)) {
       if (c < 0)
-        throw InputError(path + ": dataset '/particles/contact_count' holds " + std::to_string(c) + ", expected >= 0");
+        throw InputError(path + ": dataset '" + kContactCount + "' holds " + std::to_string(c) + ", expected >= 0");
       contacts += c;
     }
     const auto [c0, c1] = slice(m);
-    for (std::int64_t q : file_.read_rows_int("/contacts/partner", c0, c1 - c0))
+    for (std::int64_t q : file_.read_rows_int(kPartner, c0, c1 - c0))
       if (q < 0)
-        throw InputError(path + ": dataset '/contacts/partner' holds " + std::to_string(q) + ", expected an id >= 0");
-    const std::vector<double> spring = file_.read_rows_double("/contacts/spring", c0, c1 - c0);
-    schema::require_finite(path, "/contacts/spring", spring.data(), spring.size(), 3, static_cast<std::size_t>(c0));
+        throw InputError(path + ": dataset '" + kPartner + "' holds " + std::to_string(q) + ", expected an id >= 0");
+    const std::vector<double> spring = file_.read_rows_double(kSpring, c0, c1 - c0);
+    schema::require_finite(path, kSpring, spring.data(), spring.size(), 3, static_cast<std::size_t>(c0));
     if (fluid_cells_ > 0) {
       const auto [f0, f1] = slice(fluid_cells_);
       for (const char* name : kFluidFieldNames) {
-        const std::string d = std::string("/fluid/") + name;
+        const std::string d = std::string(kFluid) + "/" + name;
         const std::vector<double> v = file_.read_rows_double(d, f0, f1 - f0);
         schema::require_finite(path, d, v.data(), v.size(), 1, static_cast<std::size_t>(f0));
       }
@@ -213,44 +250,44 @@ void Reader::scan_values(MPI_Comm comm, std::int64_t n, std::int64_t m) const {
   std::int64_t total = 0;
   MPI_Allreduce(&contacts, &total, 1, MPI_INT64_T, MPI_SUM, comm);
   if (total != m)
-    throw InputError(path + ": dataset '/particles/contact_count' sums to " + std::to_string(total) +
+    throw InputError(path + ": dataset '" + kContactCount + "' sums to " + std::to_string(total) +
                      ", expected M = " + std::to_string(m) + " (the sum of rank_contact_counts)");
 }
 
 bool Reader::has_angular_velocity() const {
-  return file_.exists("/particles/angular_velocity");
+  return file_.exists(kAngularVelocity);
 }
 
 ParticleData Reader::particles(std::int64_t first, std::int64_t count, std::int64_t contact_first,
                                std::int64_t contact_count, bool rotation) const {
   ParticleData d;
-  d.id = file_.read_rows_int("/particles/id", first, count);
-  d.position = file_.read_rows_double("/particles/position", first, count);
-  d.velocity = file_.read_rows_double("/particles/velocity", first, count);
-  if (rotation) d.angular_velocity = file_.read_rows_double("/particles/angular_velocity", first, count);
-  d.contact_count = file_.read_rows_int("/particles/contact_count", first, count);
-  d.partner = file_.read_rows_int("/contacts/partner", contact_first, contact_count);
-  d.spring = file_.read_rows_double("/contacts/spring", contact_first, contact_count);
+  d.id = file_.read_rows_int(kId, first, count);
+  d.position = file_.read_rows_double(kPosition, first, count);
+  d.velocity = file_.read_rows_double(kVelocity, first, count);
+  if (rotation) d.angular_velocity = file_.read_rows_double(kAngularVelocity, first, count);
+  d.contact_count = file_.read_rows_int(kContactCount, first, count);
+  d.partner = file_.read_rows_int(kPartner, contact_first, contact_count);
+  d.spring = file_.read_rows_double(kSpring, contact_first, contact_count);
   if (version_ >= 3) {
-    const std::vector<double> a = file_.read_rows_double("/particles/list_anchor", first, count);
+    const std::vector<double> a = file_.read_rows_double(kListAnchor, first, count);
     d.anchor.assign(a.begin(), a.end());  // floats written as doubles: exact
   }
   return d;
 }
 
 bool Reader::has_fluid() const {
-  return file_.exists("/fluid");
+  return file_.exists(kFluid);
 }
 double Reader::fluid_dt_previous_s() const {
-  return file_.attr_double("/fluid", "dt_previous");
+  return file_.attr_double(kFluid, kDtPrevious);
 }
 std::int64_t Reader::fluid_steps() const {
-  return file_.attr_int("/fluid", "steps");
+  return file_.attr_int(kFluid, kFluidSteps);
 }
 
 void Reader::read_fluid_field(std::size_t field, std::int64_t first, std::int64_t count, double* out) const {
   const std::vector<double> data =
-      file_.read_rows_double(std::string("/fluid/") + kFluidFieldNames.at(field), first, count);
+      file_.read_rows_double(std::string(kFluid) + "/" + kFluidFieldNames.at(field), first, count);
   std::copy(data.begin(), data.end(), out);
 }
 

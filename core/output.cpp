@@ -10,6 +10,7 @@
 #include <stdexcept>
 
 #include "core/error.hpp"
+#include "core/schema/snapshot_names.hpp"
 
 #ifndef CGD_VERSION
 #define CGD_VERSION "unknown"
@@ -17,6 +18,8 @@
 
 namespace cgd::schema {
 namespace {
+
+using namespace names;
 
 std::vector<double> as_vector(const Vec3& v) {
   return {v.begin(), v.end()};
@@ -44,27 +47,27 @@ std::string utc_now_iso8601(MPI_Comm comm) {
 /// Every field of the scene's config structs and of DerivedScales, SI, the unit in the name.
 /// Keep in step with core/scene.hpp: a field added there belongs here too.
 void write_params(h5::File& f, const Scene& s) {
-  const std::string g = "/params";
+  const std::string g = kParams;
   auto flag = [](bool b) { return std::int64_t{b ? 1 : 0}; };
   f.create_group(g);
-  f.set_attr(g, "scene_name", s.name);
+  f.set_attr(g, kSceneName, s.name);
   f.set_attr(g, "scene_path", s.source_path);
   // effects that are on
   f.set_attr(g, "has_contacts", flag(s.has_contacts()));
   f.set_attr(g, "has_friction", flag(s.has_friction()));
-  f.set_attr(g, "has_fluid", flag(s.fluid.has_value()));
+  f.set_attr(g, kHasFluid, flag(s.fluid.has_value()));
   f.set_attr(g, "solves_fluid", flag(s.solves_fluid()));
 
   // [domain]
-  f.set_attr(g, "box_size_m", as_vector(s.domain.size_m));
-  f.set_attr(g, "gravity_m_s2", as_vector(s.domain.gravity_m_s2));
+  f.set_attr(g, kBoxSize, as_vector(s.domain.size_m));
+  f.set_attr(g, kGravity, as_vector(s.domain.gravity_m_s2));
 
   // [particles]
   const ParticlesConfig& p = s.particles;
-  f.set_attr(g, "diameter_m", p.diameter_m);
-  f.set_attr(g, "density_kg_m3", p.density_kg_m3);
-  f.set_attr(g, "solids_fraction", p.solids_fraction);
-  f.set_attr(g, "parcel_size", p.parcel_size);
+  f.set_attr(g, kDiameter, p.diameter_m);
+  f.set_attr(g, kDensity, p.density_kg_m3);
+  f.set_attr(g, kSolidsFraction, p.solids_fraction);
+  f.set_attr(g, kParcelSize, p.parcel_size);
   f.set_attr(g, "velocity_rms_m_s", p.velocity_rms_m_s);
   f.set_attr(g, "seed", static_cast<std::int64_t>(p.seed));
 
@@ -83,13 +86,13 @@ void write_params(h5::File& f, const Scene& s) {
   // [fluid] (absent: dry granular run)
   if (s.fluid) {
     const FluidConfig& fl = *s.fluid;
-    f.set_attr(g, "fluid_density_kg_m3", fl.density_kg_m3);
-    f.set_attr(g, "fluid_viscosity_Pa_s", fl.viscosity_Pa_s);
+    f.set_attr(g, kFluidDensity, fl.density_kg_m3);
+    f.set_attr(g, kFluidViscosity, fl.viscosity_Pa_s);
     f.set_attr(g, "fluid_cells", as_vector(fl.cells));
     f.set_attr(g, "courant", fl.courant);
-    f.set_attr(g, "coupling", std::string(to_string(fl.coupling)));
-    f.set_attr(g, "drag", std::string(to_string(fl.drag)));
-    f.set_attr(g, "pressure_gradient_force", flag(fl.pressure_gradient_force));
+    f.set_attr(g, kCoupling, std::string(to_string(fl.coupling)));
+    f.set_attr(g, kDrag, std::string(to_string(fl.drag)));
+    f.set_attr(g, kPressureGradientForce, flag(fl.pressure_gradient_force));
     f.set_attr(g, "parcel_correction", flag(fl.parcel_correction));
     if (!fl.drag_model_path.empty()) {  // drag = "model": the file and its checksum (provenance)
       f.set_attr(g, "drag_model", fl.drag_model_path);
@@ -122,12 +125,12 @@ void write_params(h5::File& f, const Scene& s) {
   f.set_attr(g, "particle_mass_kg", d.particle_mass_kg);
   f.set_attr(g, "parcel_diameter_m", d.parcel_diameter_m);
   f.set_attr(g, "parcel_mass_kg", d.parcel_mass_kg);
-  f.set_attr(g, "u_t_m_s", d.u_t_m_s);
+  f.set_attr(g, kUt, d.u_t_m_s);
   f.set_attr(g, "re_p", d.re_p);
   f.set_attr(g, "fr_p", d.fr_p);
   f.set_attr(g, "l_ref_m", d.l_ref_m);
-  f.set_attr(g, "l_char_m", d.l_char_m);
-  f.set_attr(g, "t_ref_s", d.t_ref_s);
+  f.set_attr(g, kLChar, d.l_char_m);
+  f.set_attr(g, kTref, d.t_ref_s);
   f.set_attr(g, "stokes_relaxation_s", d.stokes_relaxation_s);
   f.set_attr(g, "k_n_N_m", d.k_n_N_m);
   f.set_attr(g, "k_t_N_m", d.k_t_N_m);
@@ -143,7 +146,7 @@ void write_params(h5::File& f, const Scene& s) {
 
 /// One per-particle array of the snapshot: name, data, values per particle, unit.
 struct ParticleArray {
-  const char* name;
+  const char* name;  // the dataset's path
   const double* data;
   int width;
   const char* unit;
@@ -153,24 +156,26 @@ struct ParticleArray {
 }  // namespace
 
 void write_common(h5::File& file, const Format& format, const Scene& scene) {
-  file.set_attr("/", "cgd_format", std::string(format.name));
-  file.set_attr("/", "cgd_format_version", format.version);
-  file.set_attr("/", "code_version", std::string(CGD_VERSION));
-  file.set_attr("/", "created", utc_now_iso8601(file.comm()));
-  file.set_attr("/", "scene", scene.effective_toml);
+  using namespace names;
+  file.set_attr(kRoot, kFormat, std::string(format.name));
+  file.set_attr(kRoot, kFormatVersion, format.version);
+  file.set_attr(kRoot, kCodeVersion, std::string(CGD_VERSION));
+  file.set_attr(kRoot, kCreated, utc_now_iso8601(file.comm()));
+  file.set_attr(kRoot, kScene, scene.effective_toml);
   write_params(file, scene);
 }
 
 void write_snapshot(const std::string& path, MPI_Comm comm, const Scene& scene, double time_s,
                     std::int64_t step, const ParticleFields& particles, const FluidFields* fluid) {
+  using namespace names;
   const ParticleArray arrays[] = {
-      {"position", particles.position, 3, "m", true},
-      {"velocity", particles.velocity, 3, "m/s", true},
-      {"angular_velocity", particles.angular_velocity, 3, "rad/s", false},
-      {"diameter", particles.diameter, 1, "m", true},
-      {"drag_coefficient", particles.drag_coefficient, 1, "kg/(m^3 s)", false},
-      {"fluid_velocity", particles.fluid_velocity, 3, "m/s", false},
-      {"pressure_gradient", particles.pressure_gradient, 3, "Pa/m", false},
+      {kPosition, particles.position, 3, "m", true},
+      {kVelocity, particles.velocity, 3, "m/s", true},
+      {kAngularVelocity, particles.angular_velocity, 3, "rad/s", false},
+      {kParticleDiameter, particles.diameter, 1, "m", true},
+      {kDragCoefficient, particles.drag_coefficient, 1, "kg/(m^3 s)", false},
+      {kFluidVelocityAtParticles, particles.fluid_velocity, 3, "m/s", false},
+      {kPressureGradient, particles.pressure_gradient, 3, "Pa/m", false},
   };
   constexpr int kArrays = std::size(arrays);
 
@@ -204,7 +209,7 @@ void write_snapshot(const std::string& path, MPI_Comm comm, const Scene& scene, 
       problem =
           std::string("particle array '") + arrays[i].name + "' is missing on a rank that owns particles";
   }
-  if (global[2 * kArrays]) problem = "particle array 'id' is missing on a rank that owns particles";
+  if (global[2 * kArrays]) problem = std::string("particle array '") + kId + "' is missing on a rank that owns particles";
   if (global[2 * kArrays + 1]) problem = "negative particle count";
   const bool with_fluid = global[2 * kArrays + 2];
   if (with_fluid && global[2 * kArrays + 3]) problem = "fluid fields given on some ranks only";
@@ -220,25 +225,25 @@ void write_snapshot(const std::string& path, MPI_Comm comm, const Scene& scene, 
 
   h5::write_atomically(path, comm, [&](h5::File& f) {
     write_common(f, kSnapshot, scene);
-    f.set_attr("/", "time", time_s);
-    f.set_attr("/", "step", step);
+    f.set_attr(kRoot, kTime, time_s);
+    f.set_attr(kRoot, kStep, step);
 
-    f.create_group("/particles");
-    f.write_rows("/particles/id", particles.id, particles.count, 1);
-    f.set_attr("/particles/id", "unit", std::string("1"));
+    f.create_group(kParticles);
+    f.write_rows(kId, particles.id, particles.count, 1);
+    f.set_attr(kId, kUnit, std::string("1"));
     for (int i = 0; i < kArrays; ++i) {
       if (!global[2 * i]) continue;  // not simulated
-      const std::string name = std::string("/particles/") + arrays[i].name;
+      const std::string name = arrays[i].name;
       f.write_rows(name, arrays[i].data, particles.count, arrays[i].width);
-      f.set_attr(name, "unit", std::string(arrays[i].unit));
+      f.set_attr(name, kUnit, std::string(arrays[i].unit));
     }
     const bool wrote_pressure_gradient =
         std::any_of(std::begin(arrays), std::end(arrays), [&](const ParticleArray& a) {
-          return std::strcmp(a.name, "pressure_gradient") == 0 && global[2 * (&a - arrays)];
+          return std::strcmp(a.name, kPressureGradient) == 0 && global[2 * (&a - arrays)];
         });
     if (wrote_pressure_gradient) {  // record the mean that was removed from it, and the time levels
-      f.set_attr("/particles", "pressure_gradient_mean", as_vector(particles.pressure_gradient_mean));
-      f.set_attr("/particles", "time_level",
+      f.set_attr(kParticles, kPressureGradientMean, as_vector(particles.pressure_gradient_mean));
+      f.set_attr(kParticles, kTimeLevel,
                  std::string("position x_n at t_n; velocity: the leapfrog v_{n-1/2} the drag used (coupled runs); "
                              "drag_coefficient, fluid_velocity, pressure_gradient: fluid level n interpolated to x_n "
                              "with the TSC kernel (the values of the drag evaluation that starts the fluid step at t_n)"));
@@ -250,30 +255,30 @@ void write_snapshot(const std::string& path, MPI_Comm comm, const Scene& scene, 
                  nz = static_cast<std::uint64_t>(n[2]);
       const auto y0 = static_cast<std::uint64_t>(fluid->y_offset),
                  yc = static_cast<std::uint64_t>(fluid->y_count);
-      f.create_group("/fluid");
-      f.set_attr("/fluid", "cells", as_vector(fluid->cells));
-      f.set_attr("/fluid", "spacing", as_vector(fluid->spacing_m));
-      f.set_attr("/fluid", "origin", as_vector(fluid->origin_m));
-      f.set_attr("/fluid", "layout",
+      f.create_group(kFluid);
+      f.set_attr(kFluid, kCells, as_vector(fluid->cells));
+      f.set_attr(kFluid, kSpacing, as_vector(fluid->spacing_m));
+      f.set_attr(kFluid, kOrigin, as_vector(fluid->origin_m));
+      f.set_attr(kFluid, kLayout,
                  std::string("arrays (n_z, n_y, n_x[, 3]), x fastest; cells, spacing, origin as (x, y, z)"));
-      f.write_block("/fluid/void_fraction", fluid->void_fraction, {nz, ny, nx}, {0, y0, 0}, {nz, yc, nx});
-      f.set_attr("/fluid/void_fraction", "unit", std::string("1"));
-      f.write_block("/fluid/velocity", fluid->velocity, {nz, ny, nx, 3}, {0, y0, 0, 0}, {nz, yc, nx, 3});
-      f.set_attr("/fluid/velocity", "unit", std::string("m/s"));
-      f.write_block("/fluid/pressure", fluid->pressure, {nz, ny, nx}, {0, y0, 0}, {nz, yc, nx});
-      f.set_attr("/fluid/pressure", "unit", std::string("Pa"));
+      f.write_block(kVoidFraction, fluid->void_fraction, {nz, ny, nx}, {0, y0, 0}, {nz, yc, nx});
+      f.set_attr(kVoidFraction, kUnit, std::string("1"));
+      f.write_block(kCellVelocity, fluid->velocity, {nz, ny, nx, 3}, {0, y0, 0, 0}, {nz, yc, nx, 3});
+      f.set_attr(kCellVelocity, kUnit, std::string("m/s"));
+      f.write_block(kPressure, fluid->pressure, {nz, ny, nx}, {0, y0, 0}, {nz, yc, nx});
+      f.set_attr(kPressure, kUnit, std::string("Pa"));
       if (fluid->eps_velocity) {
-        f.write_block("/fluid/eps_velocity", fluid->eps_velocity, {nz, ny, nx, 3}, {0, y0, 0, 0}, {nz, yc, nx, 3});
-        f.set_attr("/fluid/eps_velocity", "unit", std::string("m/s"));
-        f.set_attr("/fluid/eps_velocity", "definition",
+        f.write_block(kEpsVelocity, fluid->eps_velocity, {nz, ny, nx, 3}, {0, y0, 0, 0}, {nz, yc, nx, 3});
+        f.set_attr(kEpsVelocity, kUnit, std::string("m/s"));
+        f.set_attr(kEpsVelocity, kDefinition,
                    std::string("cell-centred eps*u: mean of the two faces' eps_f u_f, eps_f the mean of the two "
                                "cells; sums to the solver's face sum <eps u> exactly"));
       }
       // The time level of every field (the filter combines them; see docs/schema-filtered.md)
-      f.set_attr("/fluid", "time_level",
+      f.set_attr(kFluid, kTimeLevel,
                  std::string("all fluid fields at the snapshot's time t_n = step * dt_DEM (fluid level n, "
                              "before the fluid step that starts at t_n)"));
-      f.set_attr("/fluid/pressure", "definition",
+      f.set_attr(kPressure, kDefinition,
                  std::string("periodic part of the pressure: the mean gradient rho_mix g (/particles attribute "
                              "pressure_gradient_mean) removed"));
     }

@@ -9,10 +9,12 @@
 #include "core/error.hpp"
 #include "core/h5.hpp"
 #include "core/schema/check.hpp"
+#include "core/schema/snapshot_names.hpp"
 
 namespace cgd {
 
 namespace fs = std::filesystem;
+using namespace schema::names;
 
 namespace {
 
@@ -20,12 +22,12 @@ namespace {
 /// size or a density must be.
 RunPhysics read_physics(const h5::File& f) {
   RunPhysics p;
-  const std::string g = "/params";
-  if (!f.exists(g)) throw InputError(f.path() + ": no group /params, expected the scene's parameters there");
+  const std::string g = kParams;
+  if (!f.exists(g)) throw InputError(f.path() + ": no group " + g + ", expected the scene's parameters there");
   auto positive = [&](const char* name) {
     const double v = schema::finite_attr(f, g, name);
     if (!(v > 0))
-      throw InputError(f.path() + ": attribute '" + name + "' of '/params' is " + std::to_string(v) +
+      throw InputError(f.path() + ": attribute '" + name + "' of '" + g + "' is " + std::to_string(v) +
                        ", expected a positive number");
     return v;
   };
@@ -33,28 +35,28 @@ RunPhysics read_physics(const h5::File& f) {
     const std::vector<double> v = schema::finite_attrs(f, g, name, 3);
     return std::array<double, 3>{v[0], v[1], v[2]};
   };
-  p.scene_name = f.attr_string(g, "scene_name");
-  p.scene_toml = f.has_attr("/", "scene") ? f.attr_string("/", "scene") : "";
-  p.diameter_m = positive("diameter_m");
-  p.particle_density_kg_m3 = positive("density_kg_m3");
-  p.parcel_size = positive("parcel_size");
-  p.solids_fraction = schema::finite_attr(f, g, "solids_fraction");
-  p.box_size_m = vec3("box_size_m");
+  p.scene_name = f.attr_string(g, kSceneName);
+  p.scene_toml = f.has_attr(kRoot, kScene) ? f.attr_string(kRoot, kScene) : "";
+  p.diameter_m = positive(kDiameter);
+  p.particle_density_kg_m3 = positive(kDensity);
+  p.parcel_size = positive(kParcelSize);
+  p.solids_fraction = schema::finite_attr(f, g, kSolidsFraction);
+  p.box_size_m = vec3(kBoxSize);
   for (double edge : p.box_size_m)
     if (!(edge > 0))
-      throw InputError(f.path() + ": attribute 'box_size_m' of '/params' holds " + std::to_string(edge) +
+      throw InputError(f.path() + ": attribute '" + std::string(kBoxSize) + "' of '" + g + "' holds " + std::to_string(edge) +
                        ", expected positive edges");
-  p.gravity_m_s2 = vec3("gravity_m_s2");
-  p.has_fluid = f.attr_int(g, "has_fluid") != 0;
+  p.gravity_m_s2 = vec3(kGravity);
+  p.has_fluid = f.attr_int(g, kHasFluid) != 0;
   if (p.has_fluid) {
-    p.fluid_density_kg_m3 = positive("fluid_density_kg_m3");
-    p.fluid_viscosity_Pa_s = positive("fluid_viscosity_Pa_s");
-    p.drag = f.attr_string(g, "drag");
-    p.coupling = f.attr_string(g, "coupling");
-    p.pressure_gradient_force = f.attr_int(g, "pressure_gradient_force") != 0;
-    p.u_t_m_s = positive("u_t_m_s");
-    p.l_char_m = positive("l_char_m");
-    p.t_ref_s = positive("t_ref_s");
+    p.fluid_density_kg_m3 = positive(kFluidDensity);
+    p.fluid_viscosity_Pa_s = positive(kFluidViscosity);
+    p.drag = f.attr_string(g, kDrag);
+    p.coupling = f.attr_string(g, kCoupling);
+    p.pressure_gradient_force = f.attr_int(g, kPressureGradientForce) != 0;
+    p.u_t_m_s = positive(kUt);
+    p.l_char_m = positive(kLChar);
+    p.t_ref_s = positive(kTref);
   }
   return p;
 }
@@ -79,37 +81,37 @@ Snapshot read_snapshot(const std::string& path, SnapshotContent content, MPI_Com
   schema::check_format(f, schema::kSnapshot);
   Snapshot s;
   s.path = path;
-  s.time_s = schema::finite_attr(f, "/", "time");
-  s.step = f.attr_int("/", "step");
-  if (s.step < 0) throw InputError(path + ": attribute 'step' of '/' is " + std::to_string(s.step) + ", expected >= 0");
+  s.time_s = schema::finite_attr(f, kRoot, kTime);
+  s.step = f.attr_int(kRoot, kStep);
+  if (s.step < 0) throw InputError(path + ": attribute '" + kStep + "' of '/' is " + std::to_string(s.step) + ", expected >= 0");
   s.physics = read_physics(f);
 
   // Every particle array holds N rows, N the length of /particles/id.
-  const std::string n_rows = "N particles, the length of /particles/id";
-  const std::uint64_t n = schema::require_shape(f, "/particles/id", {schema::kAnyExtent}).at(0);
+  const std::string n_rows = std::string("N particles, the length of ") + kId;
+  const std::uint64_t n = schema::require_shape(f, kId, {schema::kAnyExtent}).at(0);
   s.count = static_cast<std::int64_t>(n);
-  const bool coupled = f.exists("/particles/drag_coefficient");
+  const bool coupled = f.exists(kDragCoefficient);
   const std::vector<std::pair<const char*, std::vector<std::uint64_t>>> particle_shapes = {
-      {"/particles/position", {n, 3}}, {"/particles/velocity", {n, 3}}, {"/particles/diameter", {n}}};
+      {kPosition, {n, 3}}, {kVelocity, {n, 3}}, {kParticleDiameter, {n}}};
   for (const auto& [name, shape] : particle_shapes) schema::require_shape(f, name, shape, n_rows);
-  if (f.exists("/particles/angular_velocity")) schema::require_shape(f, "/particles/angular_velocity", {n, 3}, n_rows);
+  if (f.exists(kAngularVelocity)) schema::require_shape(f, kAngularVelocity, {n, 3}, n_rows);
   if (coupled)  // the fluid's values at the particles come together (core/output.cpp)
     for (const auto& [name, shape] : std::vector<std::pair<const char*, std::vector<std::uint64_t>>>{
-             {"/particles/fluid_velocity", {n, 3}}, {"/particles/pressure_gradient", {n, 3}}})
-      schema::require_shape(f, name, shape, n_rows + "; written with /particles/drag_coefficient");
+             {kFluidVelocityAtParticles, {n, 3}}, {kPressureGradient, {n, 3}}})
+      schema::require_shape(f, name, shape, n_rows + "; written with " + kDragCoefficient);
 
-  s.has_fluid = f.exists("/fluid");
+  s.has_fluid = f.exists(kFluid);
   std::vector<std::uint64_t> cells3, cells3x3;  // (n_z, n_y, n_x) and (n_z, n_y, n_x, 3)
   if (s.has_fluid) {
-    const std::vector<std::int64_t> cells = f.attr_ints("/fluid", "cells");
+    const std::vector<std::int64_t> cells = f.attr_ints(kFluid, kCells);
     if (cells.size() != 3)
-      throw InputError(path + ": attribute 'cells' of '/fluid' holds " + std::to_string(cells.size()) +
+      throw InputError(path + ": attribute '" + std::string(kCells) + "' of '" + kFluid + "' holds " + std::to_string(cells.size()) +
                        " values, expected 3 (x, y, z)");
-    const std::vector<double> spacing = schema::finite_attrs(f, "/fluid", "spacing", 3);
-    const std::vector<double> origin = schema::finite_attrs(f, "/fluid", "origin", 3);
+    const std::vector<double> spacing = schema::finite_attrs(f, kFluid, kSpacing, 3);
+    const std::vector<double> origin = schema::finite_attrs(f, kFluid, kOrigin, 3);
     for (int a = 0; a < 3; ++a) {
       if (cells[a] <= 0 || cells[a] > (1 << 20) || !(spacing[a] > 0))
-        throw InputError(path + ": /fluid has cells " + std::to_string(cells[a]) + " and spacing " +
+        throw InputError(path + ": " + kFluid + " has cells " + std::to_string(cells[a]) + " and spacing " +
                          std::to_string(spacing[a]) + " along axis " + std::to_string(a) +
                          ", expected a positive cell count and spacing");
       s.grid.cells[a] = static_cast<int>(cells[a]);
@@ -120,42 +122,42 @@ Snapshot read_snapshot(const std::string& path, SnapshotContent content, MPI_Com
               static_cast<std::uint64_t>(cells[0])};
     cells3x3 = cells3;
     cells3x3.push_back(3);
-    const std::string grid = "the grid's cells, /fluid attribute 'cells' = (" + std::to_string(cells[0]) + ", " +
+    const std::string grid = std::string("the grid's cells, ") + kFluid + " attribute '" + kCells + "' = (" + std::to_string(cells[0]) + ", " +
                              std::to_string(cells[1]) + ", " + std::to_string(cells[2]) + ")";
-    schema::require_shape(f, "/fluid/void_fraction", cells3, grid);
-    schema::require_shape(f, "/fluid/pressure", cells3, grid);
-    schema::require_shape(f, "/fluid/velocity", cells3x3, grid);
-    if (f.exists("/fluid/eps_velocity")) schema::require_shape(f, "/fluid/eps_velocity", cells3x3, grid);
+    schema::require_shape(f, kVoidFraction, cells3, grid);
+    schema::require_shape(f, kPressure, cells3, grid);
+    schema::require_shape(f, kCellVelocity, cells3x3, grid);
+    if (f.exists(kEpsVelocity)) schema::require_shape(f, kEpsVelocity, cells3x3, grid);
   }
   if (content == SnapshotContent::HeaderOnly) return s;
 
-  s.id = schema::read_ints(f, "/particles/id", {n});
+  s.id = schema::read_ints(f, kId, {n});
   std::vector<char> seen(n, 0);
   for (std::size_t i = 0; i < n; ++i) {
     const std::int64_t id = s.id[i];
     if (id < 0 || static_cast<std::uint64_t>(id) >= n || seen[static_cast<std::size_t>(id)])
-      throw InputError(path + ": dataset '/particles/id' holds " + std::to_string(id) + " at row " + std::to_string(i) +
+      throw InputError(path + ": dataset '" + kId + "' holds " + std::to_string(id) + " at row " + std::to_string(i) +
                        ", expected distinct ids in [0, " + std::to_string(n) + ")");
     seen[static_cast<std::size_t>(id)] = 1;
   }
-  s.position = schema::read_doubles(f, "/particles/position", {n, 3}, Finite::Everywhere, n_rows);
-  s.velocity = schema::read_doubles(f, "/particles/velocity", {n, 3}, Finite::Everywhere, n_rows);
+  s.position = schema::read_doubles(f, kPosition, {n, 3}, Finite::Everywhere, n_rows);
+  s.velocity = schema::read_doubles(f, kVelocity, {n, 3}, Finite::Everywhere, n_rows);
   if (coupled) {
-    s.drag_coefficient = schema::read_doubles(f, "/particles/drag_coefficient", {n}, Finite::Everywhere, n_rows);
-    s.fluid_velocity = schema::read_doubles(f, "/particles/fluid_velocity", {n, 3}, Finite::Everywhere, n_rows);
-    s.pressure_gradient = schema::read_doubles(f, "/particles/pressure_gradient", {n, 3}, Finite::Everywhere, n_rows);
+    s.drag_coefficient = schema::read_doubles(f, kDragCoefficient, {n}, Finite::Everywhere, n_rows);
+    s.fluid_velocity = schema::read_doubles(f, kFluidVelocityAtParticles, {n, 3}, Finite::Everywhere, n_rows);
+    s.pressure_gradient = schema::read_doubles(f, kPressureGradient, {n, 3}, Finite::Everywhere, n_rows);
   }
   if (!s.has_fluid) return s;
   const auto cells = static_cast<std::int64_t>(s.grid.cell_count());
-  s.void_fraction = schema::read_doubles(f, "/fluid/void_fraction", cells3, Finite::Everywhere);
+  s.void_fraction = schema::read_doubles(f, kVoidFraction, cells3, Finite::Everywhere);
   for (std::int64_t c = 0; c < cells; ++c)
     if (!(s.void_fraction[c] > 0))
-      throw InputError(path + ": dataset '/fluid/void_fraction' holds " + std::to_string(s.void_fraction[c]) +
+      throw InputError(path + ": dataset '" + kVoidFraction + "' holds " + std::to_string(s.void_fraction[c]) +
                        " at cell " + std::to_string(c) + ", expected values > 0");
-  s.pressure = schema::read_doubles(f, "/fluid/pressure", cells3, Finite::Everywhere);
-  s.cell_velocity = schema::read_doubles(f, "/fluid/velocity", cells3x3, Finite::Everywhere);
-  if (f.exists("/fluid/eps_velocity")) {
-    s.eps_velocity = schema::read_doubles(f, "/fluid/eps_velocity", cells3x3, Finite::Everywhere);
+  s.pressure = schema::read_doubles(f, kPressure, cells3, Finite::Everywhere);
+  s.cell_velocity = schema::read_doubles(f, kCellVelocity, cells3x3, Finite::Everywhere);
+  if (f.exists(kEpsVelocity)) {
+    s.eps_velocity = schema::read_doubles(f, kEpsVelocity, cells3x3, Finite::Everywhere);
     s.eps_velocity_from_file = true;
   } else {
     const std::vector<double>& u = s.cell_velocity;

@@ -25,6 +25,7 @@
 #include "core/error.hpp"
 #include "core/h5.hpp"
 #include "core/output.hpp"
+#include "core/schema/snapshot_names.hpp"
 #include "core/text_file.hpp"
 
 namespace cgd::schema {
@@ -117,7 +118,7 @@ const SnapshotFields& snapshot_fields(const std::string& path) {
   auto it = cache.find(path);
   if (it != cache.end() && it->second.first == written) return it->second.second;
   h5::File file = h5::File::open_read(path, MPI_COMM_SELF);
-  SnapshotFields fields{group_fields(file.id(), "/particles", path), group_fields(file.id(), "/fluid", path)};
+  SnapshotFields fields{group_fields(file.id(), names::kParticles, path), group_fields(file.id(), names::kFluid, path)};
   file.close();
   return cache.insert_or_assign(path, std::make_pair(written, std::move(fields))).first->second.second;
 }
@@ -132,7 +133,7 @@ std::string dims_text(const std::vector<hsize_t>& dims) {
 void attributes(std::ostringstream& x, const std::vector<Field>& fields, const std::string& h5,
                 const char* group, std::size_t grid_rank, const char* center, const std::string& indent) {
   for (const Field& f : fields) {
-    if (std::string_view(group) == "/particles" && f.name == "position") continue;  // the geometry
+    if (std::string(group) + "/" + f.name == names::kPosition) continue;  // the geometry
     const bool vector = f.dims.size() == grid_rank + 1 && f.dims.back() == 3;
     if (f.dims.size() != grid_rank && !vector)
       continue;  // no such field in the schema; XDMF could not show it
@@ -153,9 +154,9 @@ void particles_grid(std::ostringstream& x, const XdmfFrame& fr, const SnapshotFi
     << in << "  <Topology TopologyType=\"Polyvertex\" NumberOfElements=\"" << n
     << "\" NodesPerElement=\"1\"/>\n"
     << in << "  <Geometry GeometryType=\"XYZ\">\n"
-    << in << "    " << hdf_item(n + " 3", h5, "/particles/position") << "\n"
+    << in << "    " << hdf_item(n + " 3", h5, names::kPosition) << "\n"
     << in << "  </Geometry>\n";
-  attributes(x, fields.particles, h5, "/particles", 1, "Node", in);
+  attributes(x, fields.particles, h5, names::kParticles, 1, "Node", in);
   x << in << "</Grid>\n";
 }
 
@@ -176,7 +177,7 @@ void fluid_grid(std::ostringstream& x, const XdmfFrame& fr, const SnapshotFields
     << number(fr.spacing_m[2]) << " " << number(fr.spacing_m[1]) << " " << number(fr.spacing_m[0])
     << "</DataItem>\n"
     << in << "  </Geometry>\n";
-  attributes(x, fields.fluid, fr.snapshot_file, "/fluid", 3, "Cell", in);
+  attributes(x, fields.fluid, fr.snapshot_file, names::kFluid, 3, "Cell", in);
   x << in << "</Grid>\n";
 }
 

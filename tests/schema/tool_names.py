@@ -8,7 +8,8 @@ use for files, groups and attribute sets (f, g, h, s, a, p, b, t, c, d, ps, grp,
 with a constant string, unless the same file also stores that key into a dict of its own (a subscript
 assignment or a dict literal: the tools' in-memory rows).
 
-The same check for the C++ schema layer (core/schema/<format>.cpp, the one code that names file contents): every
+The same check for the C++ schema layer (core/schema/<format>.cpp, core/schema/snapshot_names.hpp and core/checkpoint.cpp,
+the code that names file contents): every
 attribute and dataset name it spells -- a name constant (constexpr const char* kX = "name"), a row of a name table
 ({"name", &Struct::member}), a literal path ("/bins/phi_edges") or a name given to set_attr, has_attr, attr_*,
 finite_attr(s), require_attr or child -- is named on a docs/schema-*.md page, so that a name changed in the code
@@ -64,7 +65,8 @@ def lookups(path):
     return found
 
 
-SCHEMA_SOURCES = ("coarse_summary.cpp", "filtered.cpp", "drag_model.cpp")
+SCHEMA_SOURCES = ("schema/coarse_summary.cpp", "schema/filtered.cpp", "schema/drag_model.cpp", "schema/snapshot_names.hpp",
+                  "checkpoint.cpp")
 NAME = r"[A-Za-z_][A-Za-z0-9_]*"
 SCHEMA_PATTERNS = [
     re.compile(r"constexpr const char\* k\w+ = \"(/?" + NAME + r"(?:/" + NAME + r")*)\";"),
@@ -104,7 +106,7 @@ def main():
                                 f"names {', '.join(missing)}")
     schema_count = 0
     for source in SCHEMA_SOURCES:
-        path = os.path.join(ROOT, "core", "schema", source)
+        path = os.path.join(ROOT, "core", source)
         for line, key in schema_names(path):
             schema_count += 1
             missing = [part for part in key.split("/") if part and not documented(part, names)]
