@@ -119,9 +119,23 @@ void compute_forces(const Particles& p, NeighborList& list, const Contact& conta
     for (std::int64_t e = k0; e < k1; ++e) {
       if (e + kAhead < n_entries) {
         // the partner's position only: its velocity and spin are needed where it touches, which few do
-        const std::int32_t jn = index[e + kAhead] & kMask;
+        const std::int32_t raw_n = index[e + kAhead];
+        const std::int32_t jn = raw_n & kMask;
         __builtin_prefetch(x + 3 * jn);
         __builtin_prefetch(x + 3 * jn + 2);
+        if constexpr (kFriction) {
+          // a flagged entry touched at a recent step and most likely touches now: its spring (no longer part
+          // of a stream the hardware follows) and the partner's velocity and spin, which the law reads
+          if (NeighborList::spring_flagged(raw_n)) {
+            const double* s = &list.xi[3 * (e + kAhead)];
+            __builtin_prefetch(s);
+            __builtin_prefetch(s + 2);
+            __builtin_prefetch(v + 3 * jn);
+            __builtin_prefetch(v + 3 * jn + 2);
+            __builtin_prefetch(w + 3 * jn);
+            __builtin_prefetch(w + 3 * jn + 2);
+          }
+        }
       }
       const std::int32_t raw = index[e];
       const std::int32_t j = raw & kMask;
