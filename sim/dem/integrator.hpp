@@ -96,7 +96,8 @@ void compute_forces(const Particles& p, NeighborList& list, const Contact& conta
   const double* __restrict v = p.v.data();
   const double* __restrict w = kFriction ? p.w.data() : nullptr;
   const std::int64_t* __restrict offset = list.offset.data();
-  const std::int32_t* __restrict index = list.index.data();
+  std::int32_t* __restrict index = list.index.data();  // the partner, and the spring's flag (neighbor.hpp)
+  constexpr std::int32_t kMask = NeighborList::kPartnerMask;
   const std::int64_t n_entries = static_cast<std::int64_t>(list.index.size());
   // prefetch distance in list entries: entries are contiguous over rows (CSR), so the look-ahead runs
   // on into the next particles' lists. 32 (issue 17, third round): in the Table 1 box's own developed state
@@ -118,24 +119,45 @@ void compute_forces(const Particles& p, NeighborList& list, const Contact& conta
     for (std::int64_t e = k0; e < k1; ++e) {
       if (e + kAhead < n_entries) {
         // the partner's position only: its velocity and spin are needed where it touches, which few do
-        const std::int32_t jn = index[e + kAhead];
+        const std::int32_t raw_n = index[e + kAhead];
+        const std::int32_t jn = raw_n & kMask;
         __builtin_prefetch(x + 3 * jn);
         __builtin_prefetch(x + 3 * jn + 2);
+        if constexpr (kFriction) {
+          // a flagged entry touched at a recent step and most likely touches now: its spring (no longer part
+          // of a stream the hardware follows) and the partner's velocity and spin, which the law reads
+          if (NeighborList::spring_flagged(raw_n)) {
+            const double* s = &list.xi[3 * (e + kAhead)];
+            __builtin_prefetch(s);
+            __builtin_prefetch(s + 2);
+            __builtin_prefetch(v + 3 * jn);
+            __builtin_prefetch(v + 3 * jn + 2);
+            __builtin_prefetch(w + 3 * jn);
+            __builtin_prefetch(w + 3 * jn + 2);
+          }
+        }
       }
-      const std::int32_t j = index[e];
+      const std::int32_t raw = index[e];
+      const std::int32_t j = raw & kMask;
       const V3 dx = xi - load3(x + 3 * j);
       const double r2 = dot(dx, dx);
       if (r2 >= contact_dist2) {
         if constexpr (kFriction) {
-          // contact ended: its history goes with it. Written only where it is not +0.0 already (bit
-          // pattern: a -0.0 becomes +0.0 as before), so that the entries that never touch are only read.
-          double* s = &list.xi[3 * e];
-          if ((std::bit_cast<std::uint64_t>(s[0]) | std::bit_cast<std::uint64_t>(s[1]) |
-               std::bit_cast<std::uint64_t>(s[2])) != 0)
+          // contact ended: its history goes with it. Only a flagged entry's spring can be other than +0.0
+          // (neighbor.hpp), so the entries that never touch read no spring at all (issue 25, third round);
+          // a flagged one is set to +0.0 (a -0.0 too, as before) and its flag cleared.
+          if (NeighborList::spring_flagged(raw)) {
+            double* s = &list.xi[3 * e];
             s[0] = s[1] = s[2] = 0.0;
+            index[e] = j;
+          }
         }
         continue;
       }
+      // touching: its spring becomes what the law makes of it (flagged: it may be non-zero from now on)
+      if constexpr (kFriction)
+        if (!NeighborList::spring_flagged(raw))
+          index[e] = static_cast<std::int32_t>(static_cast<std::uint32_t>(raw) | NeighborList::kSpringFlag);
       const double rr = std::sqrt(r2);
       const double overlap = contact_dist - rr;
       if (overlap > st.max_overlap) {

@@ -141,7 +141,7 @@ void NeighborList::save_history(const Particles& p, ContactStore& store) const {
       for (std::int64_t k = offset[i]; k < offset[i + 1]; ++k) {
         const double* s = &xi[3 * k];
         if (s[0] != 0.0 || s[1] != 0.0 || s[2] != 0.0) {
-          store.partner.push_back(p.id[index[k]]);
+          store.partner.push_back(p.id[partner(static_cast<std::size_t>(k))]);
           store.xi.insert(store.xi.end(), s, s + 3);
         }
       }
@@ -156,15 +156,17 @@ void NeighborList::load_history(const Particles& p, const ContactStore& store) {
     for (std::int64_t s = store.offset[i]; s < store.offset[i + 1]; ++s) {
       // neighbours are sorted by id: binary search the partner
       const auto begin = index.begin() + offset[i], end = index.begin() + offset[i + 1];
-      const auto it = std::lower_bound(begin, end, store.partner[s],
-                                       [&](std::int32_t j, std::int64_t id) { return p.id[j] < id; });
+      const auto it = std::lower_bound(begin, end, store.partner[s], [&](std::int32_t j, std::int64_t id) {
+        return p.id[j & kPartnerMask] < id;
+      });
       // A stored contact is always within the cutoff, so it is found; if not (it cannot touch
       // before the next rebuild either) the record is dropped.
-      if (it != end && p.id[*it] == store.partner[s]) {
+      if (it != end && p.id[*it & kPartnerMask] == store.partner[s]) {
         const std::size_t k = static_cast<std::size_t>(it - index.begin());
         xi[3 * k] = store.xi[3 * s];
         xi[3 * k + 1] = store.xi[3 * s + 1];
         xi[3 * k + 2] = store.xi[3 * s + 2];
+        index[k] = static_cast<std::int32_t>(static_cast<std::uint32_t>(index[k]) | kSpringFlag);  // may be non-zero
       }
     }
   }

@@ -223,7 +223,7 @@ void DemSystem::classify(const NeighborList* list) {
   force_rows_.clear();
   referenced_.assign(p_.n_total, 0);
   if (list) {
-    for (std::int32_t j : list->index) referenced_[static_cast<std::size_t>(j)] = 1;
+    for (std::int32_t j : list->index) referenced_[static_cast<std::size_t>(j & NeighborList::kPartnerMask)] = 1;
     for (std::size_t i = 0; i < n; ++i)
       if (list->offset[i + 1] > list->offset[i]) {
         referenced_[i] = 1;
@@ -454,7 +454,7 @@ Diagnostics DemSystem::diagnostics(bool synchronous) const {
     }
     if (s_.contacts && list_valid_) {  // before the first step (or after a restart) there is no list yet
       for (std::int64_t e = list_.offset[i]; e < list_.offset[i + 1]; ++e) {
-        const std::int32_t j = list_.index[e];
+        const std::int32_t j = list_.partner(static_cast<std::size_t>(e));
         double r2 = 0;
         for (int c = 0; c < 3; ++c) {
           const double dx = xn[c] - p_.x[3 * j + c];
