@@ -12,22 +12,23 @@ namespace {
 
 /// The checkpoint's datasets and attributes (docs/schema-run.md "Checkpoint"), each spelled once; the fluid
 /// fields' names are kFluidFieldNames (core/checkpoint.hpp), the common attributes schema::write_common's.
-constexpr const char* kRoot = "/";
-constexpr const char* kParticles = "/particles";
-constexpr const char* kId = "/particles/id";
-constexpr const char* kPosition = "/particles/position";
-constexpr const char* kVelocity = "/particles/velocity";
-constexpr const char* kAngularVelocity = "/particles/angular_velocity";
+// the root and the particles' id, position, velocity and spin: a snapshot's names (core/schema/snapshot_names.hpp)
+using schema::names::kAngularVelocity;
+using schema::names::kFluid;
+using schema::names::kId;
+using schema::names::kParticles;
+using schema::names::kPosition;
+using schema::names::kRoot;
+using schema::names::kStep;
+using schema::names::kTime;
+using schema::names::kVelocity;
 constexpr const char* kContactCount = "/particles/contact_count";
 constexpr const char* kListAnchor = "/particles/list_anchor";  // version 3
 constexpr const char* kContacts = "/contacts";
 constexpr const char* kPartner = "/contacts/partner";
 constexpr const char* kSpring = "/contacts/spring";
-constexpr const char* kFluid = "/fluid";
 constexpr const char* kDtPrevious = "dt_previous";  // of /fluid
 constexpr const char* kFluidSteps = "steps";        // of /fluid
-constexpr const char* kStep = "step";
-constexpr const char* kTime = "time";
 constexpr const char* kRebuildDue = "rebuild_due";
 constexpr const char* kSkin = "skin";
 constexpr const char* kLastSortStep = "last_sort_step";

@@ -224,6 +224,25 @@ def analyse(runs, n_cells, from_tref, bin_width):
                 drag=float(drag_p.mean()), pressure=float(pressure_p.mean()))
 
 
+def balance(r):
+    """drag / pressure / rest of a bin (or of a run's particles): each a share of the weight."""
+    return f"{r['drag']:.2f} / {r['pressure']:.2f} / {1 - r['drag'] - r['pressure']:+.2f}"
+
+
+def bin_table(results, cell, first=None):
+    """A Markdown table of one row per phi bin that holds particles in some run, a column per run: cell(bin) where
+    the run's bin holds particles, empty otherwise; `first` = (label, results): a row of cell(run) above them."""
+    width = results[0][1]["bins"][0]["hi"] - results[0][1]["bins"][0]["lo"]
+    rows = ["| phi bin | " + " | ".join(label for label, _ in results) + " |", "|---|" + "---|" * len(results)]
+    if first is not None:
+        rows.append(f"| {first[0]} | " + " | ".join(cell(r) for _, r in first[1]) + " |")
+    for b in range(max(len(r["bins"]) for _, r in results)):
+        cells = [cell(r["bins"][b]) if b < len(r["bins"]) and r["bins"][b]["fraction"] > 0 else "" for _, r in results]
+        if any(cells):
+            rows.append(f"| {b * width:.2f}-{b * width + width:.2f} | " + " | ".join(cells) + " |")
+    return rows
+
+
 def tables(results, n_cells, from_tref, coarse_from_tref=None):
     window = f"{from_tref:g} t_ref" + ("" if coarse_from_tref is None else f" (coarse runs: {coarse_from_tref:g})")
     out = [f"Runs seen on the grid of {n_cells} cells across (box filter, nearest-grid-point particles), "
@@ -237,37 +256,11 @@ def tables(results, n_cells, from_tref, coarse_from_tref=None):
         out.append(f"| {label} | {r['snapshots']} | {r['phi']:.3f} | {r['domain']:.3f}{err} | {r['local']:.3f} | "
                    f"{r['drift']:.3f}{derr} | {r['phi_pw']:.3f} / {r['phi_std']:.3f} / {r['phi_p99']:.3f} | "
                    f"{100 * r['tail']:.1f} % | {r['support']:.2f} |")
-    n_bins = max(len(r["bins"]) for _, r in results)
-    out += ["", "Conditional slip: particle fraction and mean local slip per phi bin", "",
-            "| phi bin | " + " | ".join(label for label, _ in results) + " |",
-            "|---|" + "---|" * len(results)]
-    for b in range(n_bins):
-        lo = b * (results[0][1]["bins"][0]["hi"] - results[0][1]["bins"][0]["lo"])
-        cells = []
-        for _, r in results:
-            if b < len(r["bins"]) and r["bins"][b]["fraction"] > 0:
-                cells.append(f"{100 * r['bins'][b]['fraction']:.1f} % : {r['bins'][b]['slip']:.3f}")
-            else:
-                cells.append("")
-        if any(cells):
-            out.append(f"| {lo:.2f}-{lo + results[0][1]['bins'][0]['hi']:.2f} | " + " | ".join(cells) + " |")
+    out += ["", "Conditional slip: particle fraction and mean local slip per phi bin", ""]
+    out += bin_table(results, lambda bn: f"{100 * bn['fraction']:.1f} % : {bn['slip']:.3f}")
     out += ["", "Vertical force balance per phi bin, in units of the particles' weight: drag / pressure / rest "
-            "(contacts and mean acceleration); the first row over all particles", "",
-            "| phi bin | " + " | ".join(label for label, _ in results) + " |",
-            "|---|" + "---|" * len(results)]
-    out.append("| all | " + " | ".join(f"{r['drag']:.2f} / {r['pressure']:.2f} / {1 - r['drag'] - r['pressure']:+.2f}"
-                                        for _, r in results) + " |")
-    for b in range(n_bins):
-        lo = b * (results[0][1]["bins"][0]["hi"] - results[0][1]["bins"][0]["lo"])
-        cells = []
-        for _, r in results:
-            if b < len(r["bins"]) and r["bins"][b]["fraction"] > 0:
-                bn = r["bins"][b]
-                cells.append(f"{bn['drag']:.2f} / {bn['pressure']:.2f} / {1 - bn['drag'] - bn['pressure']:+.2f}")
-            else:
-                cells.append("")
-        if any(cells):
-            out.append(f"| {lo:.2f}-{lo + results[0][1]['bins'][0]['hi']:.2f} | " + " | ".join(cells) + " |")
+            "(contacts and mean acceleration); the first row over all particles", ""]
+    out += bin_table(results, balance, first=("all", results))
     return "\n".join(out)
 
 

@@ -157,7 +157,7 @@ void compute_forces(const Particles& p, NeighborList& list, const Contact& conta
       // touching: its spring becomes what the law makes of it (flagged: it may be non-zero from now on)
       if constexpr (kFriction)
         if (!NeighborList::spring_flagged(raw))
-          index[e] = static_cast<std::int32_t>(static_cast<std::uint32_t>(raw) | NeighborList::kSpringFlag);
+          index[e] = NeighborList::with_spring_flag(raw);
       const double rr = std::sqrt(r2);
       const double overlap = contact_dist - rr;
       if (overlap > st.max_overlap) {

@@ -166,7 +166,7 @@ void NeighborList::load_history(const Particles& p, const ContactStore& store) {
         xi[3 * k] = store.xi[3 * s];
         xi[3 * k + 1] = store.xi[3 * s + 1];
         xi[3 * k + 2] = store.xi[3 * s + 2];
-        index[k] = static_cast<std::int32_t>(static_cast<std::uint32_t>(index[k]) | kSpringFlag);  // may be non-zero
+        index[k] = with_spring_flag(index[k]);  // may be non-zero
       }
     }
   }

@@ -43,6 +43,9 @@ class NeighborList {
   static constexpr std::uint32_t kSpringFlag = 0x80000000u;
   std::int32_t partner(std::size_t e) const { return index[e] & kPartnerMask; }
   static bool spring_flagged(std::int32_t raw) { return raw < 0; }
+  static std::int32_t with_spring_flag(std::int32_t raw) {
+    return static_cast<std::int32_t>(static_cast<std::uint32_t>(raw) | kSpringFlag);
+  }
 
   std::vector<std::int64_t> offset;  // n_owned + 1
   std::vector<std::int32_t> index;   // local index of the neighbour (& kPartnerMask; top bit: kSpringFlag)
