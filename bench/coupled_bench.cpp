@@ -33,6 +33,7 @@
 #include <string>
 #include <vector>
 
+#include "core/mpi_init.hpp"
 #include "core/cli.hpp"
 #include "core/error.hpp"
 #include "core/output.hpp"
@@ -65,7 +66,7 @@ struct StepCosts {
 }  // namespace
 
 int main(int argc, char** argv) {
-  MPI_Init(&argc, &argv);
+  cgd::init_mpi(&argc, &argv);
   const int status = cgd::run_tool([&] {
     CLI::App app{"Coupled CFD-DEM benchmark: time per fluid step by phase and projected wall times"};
     std::string scene_path = std::string(CGD_SOURCE_DIR) + "/data/scenes/table1_phi005.toml";

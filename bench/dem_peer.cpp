@@ -14,6 +14,7 @@
 #include <string>
 #include <vector>
 
+#include "core/mpi_init.hpp"
 #include "core/cli.hpp"
 #include "core/error.hpp"
 #include "core/scene.hpp"
@@ -83,7 +84,7 @@ DataFile read_lammps_data(const std::string& path) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  MPI_Init(&argc, &argv);
+  cgd::init_mpi(&argc, &argv);
   const int status = cgd::run_tool([&] {
     CLI::App app{"DEM peer benchmark: cgd's engine on a LAMMPS data file"};
     std::string data, scene_path;

@@ -59,6 +59,7 @@
 #define CGD_CALLGRIND_STOP() (void)0
 #endif
 
+#include "core/mpi_init.hpp"
 #include "core/checkpoint.hpp"
 #include "core/cli.hpp"
 #include "core/error.hpp"
@@ -103,7 +104,7 @@ int floor_mod(int a, int n) { return ((a % n) + n) % n; }
 }  // namespace
 
 int main(int argc, char** argv) {
-  MPI_Init(&argc, &argv);
+  cgd::init_mpi(&argc, &argv);
   const int status = cgd::run_tool([&] {
     CLI::App app{"Developed-state engine benchmark: cost per particle-step by phase, projected Table 1 hours"};
     std::string scene_path = std::string(CGD_SOURCE_DIR) + "/data/scenes/table1_phi005.toml";

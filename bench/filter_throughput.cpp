@@ -13,6 +13,7 @@
 #include <cstdlib>
 #include <random>
 
+#include "core/mpi_init.hpp"
 #include "core/drag.hpp"
 #include "filter/box_filter.hpp"
 #include "filter/filter.hpp"
@@ -29,7 +30,7 @@ double peak_mib() {
 }  // namespace
 
 int main(int argc, char** argv) {
-  MPI_Init(&argc, &argv);
+  cgd::init_mpi(&argc, &argv);
   const long n_particles = argc > 1 ? std::atol(argv[1]) : 457000;
   const int repeats = argc > 2 ? std::atoi(argv[2]) : 3;
   const double d = 75e-6, L[3] = {106 * d, 426 * d, 106 * d};

@@ -12,6 +12,7 @@
 #include <random>
 #include <vector>
 
+#include "core/mpi_init.hpp"
 #include "sim/fluid/solver.hpp"
 
 namespace {
@@ -120,7 +121,7 @@ class QuietReporter : public benchmark::BenchmarkReporter {
 }  // namespace
 
 int main(int argc, char** argv) {
-  MPI_Init(&argc, &argv);
+  cgd::init_mpi(&argc, &argv);
   benchmark::Initialize(&argc, argv);
   int rank = 0;
   MPI_Comm_rank(MPI_COMM_WORLD, &rank);

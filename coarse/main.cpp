@@ -7,6 +7,7 @@
 #include <filesystem>
 #include <iostream>
 
+#include "core/mpi_init.hpp"
 #include "coarse/coarse.hpp"
 #include "core/cli.hpp"
 #include "core/error.hpp"
@@ -60,7 +61,7 @@ int summarise_main(int argc, char** argv) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  MPI_Init(&argc, &argv);
+  cgd::init_mpi(&argc, &argv);
   bool summarise = false;
   for (int i = 1; i < argc; ++i) summarise = summarise || std::string(argv[i]) == "--summarise";
   const int status = cgd::run_tool([&] {

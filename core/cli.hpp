@@ -4,7 +4,7 @@
 // A tool's main is
 //
 //   int main(int argc, char** argv) {
-//     MPI_Init(&argc, &argv);                       // if the tool uses MPI
+//     cgd::init_mpi(&argc, &argv);                 // if the tool uses MPI (core/mpi_init.hpp)
 //     const int status = cgd::run_tool([&] {
 //       const auto options = cgd::parse_run_command_line(argc, argv, "cgd-generate", "Resolved CFD-DEM
 //       runs"); const auto scene = cgd::load_scene(options.scene_path, options.overrides);   // before any

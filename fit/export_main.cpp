@@ -11,6 +11,7 @@
 #include <string>
 #include <vector>
 
+#include "core/mpi_init.hpp"
 #include "core/cli.hpp"
 #include "core/error.hpp"
 #include "core/filtered_drag.hpp"
@@ -61,7 +62,7 @@ void check_name(const std::string& name) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  MPI_Init(&argc, &argv);
+  cgd::init_mpi(&argc, &argv);
   const int status = cgd::run_tool([&] {
     std::string model_path, scene_path, output, name;
     std::vector<std::string> overrides;

@@ -8,6 +8,7 @@
 #include <string>
 #include <vector>
 
+#include "core/mpi_init.hpp"
 #include "core/cli.hpp"
 #include "core/error.hpp"
 #include "core/scene.hpp"
@@ -17,7 +18,7 @@
 #include "core/filtered_drag.hpp"
 
 int main(int argc, char** argv) {
-  MPI_Init(&argc, &argv);
+  cgd::init_mpi(&argc, &argv);
   const int status = cgd::run_tool([&] {
     std::vector<std::string> inputs;
     std::string output;

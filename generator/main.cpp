@@ -2,13 +2,14 @@
 // parse, load and validate the scene (nothing is written before that succeeds), run it.
 #include <mpi.h>
 
+#include "core/mpi_init.hpp"
 #include "core/cli.hpp"
 #include "core/error.hpp"
 #include "core/scene.hpp"
 #include "sim/run.hpp"
 
 int main(int argc, char** argv) {
-  MPI_Init(&argc, &argv);
+  cgd::init_mpi(&argc, &argv);
   const int status = cgd::run_tool([&] {
     const cgd::RunOptions options = cgd::parse_run_command_line(
         argc, argv, "cgd-generate", "Resolved CFD-DEM run of a scene: snapshots of particles (and fluid) for filtering");

@@ -28,6 +28,7 @@
 #include <string>
 #include <vector>
 
+#include "core/mpi_init.hpp"
 #include "core/filtered_drag.hpp"
 #include "core/scene.hpp"
 #include "fit/fitter.hpp"
@@ -253,7 +254,7 @@ int make_table(const std::string& out_path) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  MPI_Init(&argc, &argv);
+  cgd::init_mpi(&argc, &argv);
   int status = 2;
   try {
     std::vector<std::string> a(argv + 1, argv + argc);
