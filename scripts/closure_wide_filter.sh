@@ -18,13 +18,18 @@
 #      configuration, mean over the seeds +- their standard error -> OUT/closure_wide/table.md
 # A configuration whose summary.h5 exists is not run again (delete its directory to rerun it).
 # Environment: BUILD (default build), NICE (default 0: a niceness for the coarse runs).
+#   HELDOUT=PHI,PHI,... (e.g. 0.02,0.05,0.10; default empty): the held-out test instead. Everything goes to
+#   OUT/closure_heldout; the model runs of each phi of PHIS use a model fitted WITHOUT that phi's run: cgd-filter
+#   of the other HELDOUT runs with the pipeline's filter settings (FILTER_GRIDS, WIDTHS, BINS, FROM_TREF of the
+#   half profile) and cgd-fit with its FIT_ARGS -> OUT/closure_heldout/without_phi<phi>/model.h5. The perfect
+#   tables (steps 1-2) stay each run's own: they are the reference, not a closure under test.
 set -euo pipefail
 repo=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
 out=${1:?usage: closure_wide_filter.sh OUT [PHIS] [ALPHAS] [SEEDS] [TABLE_GRIDS] [RATIOS]}
 IFS=, read -r -a phis <<< "${2:-0.05,0.10}"
 IFS=, read -r -a alphas <<< "${3:-3,4,6}"
 IFS=, read -r -a seeds <<< "${4:-1,2,3}"
-table_grids=${5:-4,3,2}
+table_grids=${5-4,3,2}
 IFS=, read -r -a grids <<< "$table_grids"
 IFS=, read -r -a ratios <<< "${6:-1,1.5,2}"
 build=${BUILD:-$repo/build}
@@ -36,7 +41,9 @@ base_scene=$(cd "$repo" && mk print-BASE_SCENE)
 box_dp=$(cd "$repo" && mk print-BOX_DP)
 read -r -a coarse_set <<< "$(cd "$repo" && mk print-COARSE_SET)"
 dx=$(python3 -c "print($box_dp/$cells)")
+IFS=, read -r -a heldout <<< "${HELDOUT:-}"
 dir=$out/closure_wide
+[ ${#heldout[@]} -gt 0 ] && dir=$out/closure_heldout
 mkdir -p "$dir"
 run_dirs=()
 for phi in "${phis[@]}"; do
@@ -44,7 +51,8 @@ for phi in "${phis[@]}"; do
   run_dirs+=("$out/generate/phi$phi")
 done
 
-if [ ! -f "$dir/filtered.h5" ]; then
+# TABLE_GRIDS may be empty ("" : the model runs only)
+if [ ${#grids[@]} -gt 0 ] && [ ! -f "$dir/filtered.h5" ]; then
   echo "[closure_wide] filter ${phis[*]} on grids $table_grids" >&2
   "$build/cgd-filter" "${run_dirs[@]}" --from-tref $from_tref --grids "$table_grids" --force --quiet -o "$dir/filtered.h5"
 fi
@@ -52,6 +60,29 @@ for g in "${grids[@]}"; do
   [ -f "$dir/perfect_g$g.h5" ] || "$build/cgd-fit" "$dir/filtered.h5" --grid-table "$g" --force -o "$dir/perfect_g$g.h5" \
     > "$dir/perfect_g$g.report.txt"
 done
+# the held-out models: for each phi, the pipeline's filter and fit on the other HELDOUT runs
+model_for() {  # phi -> the model file its runs use
+  if [ ${#heldout[@]} -eq 0 ]; then echo "$out/fit/model.h5"; else echo "$dir/without_phi$1/model.h5"; fi
+}
+if [ ${#heldout[@]} -gt 0 ]; then
+  read -r -a filter_args <<< "$(cd "$repo" && mk print-FILTER_ARGS_LINE)"
+  read -r -a fit_args <<< "$(cd "$repo" && mk print-FIT_ARGS)"
+  for phi in "${phis[@]}"; do
+    others=()
+    for h in "${heldout[@]}"; do
+      [ "$h" = "$phi" ] && continue
+      [ -f "$out/generate/phi$h/DONE" ] || { echo "closure_wide_filter.sh: HELDOUT run $out/generate/phi$h is not finished" >&2; exit 2; }
+      others+=("$out/generate/phi$h")
+    done
+    sub=$dir/without_phi$phi
+    mkdir -p "$sub"
+    if [ ! -f "$sub/filtered.h5" ]; then
+      echo "[closure_heldout] filter ${others[*]} (without $phi)" >&2
+      "$build/cgd-filter" "${others[@]}" "${filter_args[@]}" --force --quiet -o "$sub/filtered.h5"
+    fi
+    [ -f "$sub/model.h5" ] || "$build/cgd-fit" "$sub/filtered.h5" "${fit_args[@]}" --force -o "$sub/model.h5" > "$sub/model.report.txt"
+  done
+fi
 for phi in "${phis[@]}"; do
   ref=$dir/resolved_phi$phi.h5
   [ -f "$ref" ] || "$build/cgd-coarse" --summarise "$out/generate/phi$phi" --from-tref $from_tref --force -o "$ref" > /dev/null
@@ -78,9 +109,10 @@ for phi in "${phis[@]}"; do
         coarse "phi${phi}_a${alpha}_g${g}_s$seed" "$phi" "$alpha" "$seed" --model "$dir/perfect_g$g.h5" \
           --set fluid.parcel_correction=false
       done
-      if [ -f "$out/fit/model.h5" ]; then
+      model=$(model_for "$phi")
+      if [ -f "$model" ]; then
         for r in "${ratios[@]}"; do
-          coarse "phi${phi}_a${alpha}_r${r}_s$seed" "$phi" "$alpha" "$seed" --model "$out/fit/model.h5" \
+          coarse "phi${phi}_a${alpha}_r${r}_s$seed" "$phi" "$alpha" "$seed" --model "$model" \
             --set fluid.parcel_correction=false --set fluid.filter_to_grid_ratio="$r"
         done
       fi
