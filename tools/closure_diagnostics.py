@@ -160,7 +160,7 @@ def snapshot_cells(path, n_cells, from_tref):
     weight = consts["rho_p"] * consts["g"]  # per unit particle volume
     return dict(flat=flat, solids=solids, momentum=momentum, e=e_c, eu=eu_c, cell_volume=cell_volume,
                 drag_share=beta * (u_p - v[:, 1]) / weight, pressure_share=-dpdy / weight,
-                n=n, v_mean=float(v[:, 1].mean()), dpdy_mean=float(dpdy.mean()),
+                n=n, v_y=v[:, 1], v_mean=float(v[:, 1].mean()), dpdy_mean=float(dpdy.mean()),
                 u_domain=float(eu.sum() / eps.sum()), phi_mean=n * vol / float(np.prod(box)),
                 fine_volume=fine_volume, **consts)
 
