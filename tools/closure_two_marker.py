@@ -24,6 +24,7 @@ RUN: a resolved run directory (snapshots/*.h5), at least two (the held-out test 
 -o; prints the tables. Exit status 0; 2 for bad arguments or a file that is not a snapshot (the message names it).
 """
 import argparse
+import collections
 import os
 import sys
 
@@ -58,6 +59,9 @@ def particles(run, n_cells, from_tref, every):
                 s_i=np.concatenate(own_slip))
 
 
+Fit = collections.namedtuple("Fit", "B a_c b_c a_i b_i n")
+
+
 def fit(data, sel_of):
     """The three closures of the particles selected (sel_of(run) -> mask) in the runs given, pooled."""
     D = np.concatenate([r["D"][sel_of(r)] for r in data])
@@ -65,7 +69,7 @@ def fit(data, sel_of):
     s_i = np.concatenate([r["s_i"][sel_of(r)] for r in data])
     b_c, a_c = np.polyfit(s_c, D, 1)
     b_i, a_i = np.polyfit(s_i, D, 1)
-    return dict(B=D.sum() / s_i.sum(), a_c=a_c, b_c=b_c, a_i=a_i, b_i=b_i, n=len(D))
+    return Fit(B=D.sum() / s_i.sum(), a_c=a_c, b_c=b_c, a_i=a_i, b_i=b_i, n=len(D))
 
 
 def main():
@@ -94,8 +98,8 @@ def main():
         if sum(int(in_bin(lo)(r).sum()) for r in data) < a.min:
             continue
         f = fit(data, in_bin(lo))
-        out.append(f"| {lo:.2f}–{lo + a.bin:.2f} | {f['n']} | {f['B']:.3f} | {f['a_c']:+.3f} | {f['b_c']:.3f} | "
-                   f"{f['a_i']:+.3f} | {f['b_i']:.3f} |")
+        out.append(f"| {lo:.2f}–{lo + a.bin:.2f} | {f.n} | {f.B:.3f} | {f.a_c:+.3f} | {f.b_c:.3f} | "
+                   f"{f.a_i:+.3f} | {f.b_i:.3f} |")
     out += ["", "Held out: each run's bin drag predicted by the closures fitted on the other runs "
             "(particle-weighted rms / worst of predicted/measured − 1):", "",
             "| run | bins | ratio (φ̄ only) | cell slip (φ̄, s_c) | own slip (φ̄, s_i) |", "|---|---|---|---|---|"]
@@ -108,9 +112,9 @@ def main():
                 continue
             f = fit(others, in_bin(lo))
             measured = run["D"][sel].mean()
-            errs["ratio"].append(f["B"] * run["s_i"][sel].mean() / measured - 1)
-            errs["cell"].append((f["a_c"] + f["b_c"] * run["s_c"][sel].mean()) / measured - 1)
-            errs["own"].append((f["a_i"] + f["b_i"] * run["s_i"][sel].mean()) / measured - 1)
+            errs["ratio"].append(f.B * run["s_i"][sel].mean() / measured - 1)
+            errs["cell"].append((f.a_c + f.b_c * run["s_c"][sel].mean()) / measured - 1)
+            errs["own"].append((f.a_i + f.b_i * run["s_i"][sel].mean()) / measured - 1)
             weights.append(sel.sum())
         if not weights:
             out.append(f"| {names[k]} | 0 | – | – | – |")
