@@ -97,7 +97,7 @@ with tempfile.TemporaryDirectory() as tmp:
         for k in ("A", "B"):
             rms, worst = rms_worst(held[k][3])
             check(rms == 0.0 and abs(worst) == 0.0, f"{k} held out, cell-slip closure: exact ({held[k][3]})")
-    check(os.path.exists(prefix + ".md"), "-o PREFIX writes PREFIX.md")
+    check(os.path.exists(prefix + ".md") and os.path.exists(prefix + ".png"), "-o PREFIX writes PREFIX.md and PREFIX.png")
     r = subprocess.run([sys.executable, tool, "--cells", "2", runs[0]], capture_output=True, text=True)
     check(r.returncode == 2 and "Traceback" not in r.stderr, f"one run: exit 2 without a traceback ({r.returncode})")
     empty = os.path.join(tmp, "empty")
