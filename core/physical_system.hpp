@@ -5,7 +5,7 @@
 // reader and one tolerance-based comparison, used by every file that carries it:
 //   filtered files (cgd-filter, docs/schema-filtered.md): root attributes, the law under `micro_drag`;
 //   drag model files (cgd-fit, docs/schema-drag-model.md): root attributes, the law under `base_drag`;
-//   snapshots (/params, written by core/output.cpp): RunPhysics::system() (core/snapshot.hpp);
+//   snapshots (/params, written by core/schema/common.cpp): RunPhysics::system() (core/schema/common.hpp);
 //   scenes: physical_system(scene).
 // The attribute names are those of the two derived formats: diameter_m, particle_density_kg_m3,
 // fluid_density_kg_m3, fluid_viscosity_Pa_s, gravity_m_s2 (|g|), u_t_m_s, l_char_m.

@@ -15,7 +15,7 @@ namespace cgd::schema {
 
 /// One file format of cgd (docs/schema-*.md): its cgd_format name, the version this build writes, the
 /// oldest version it reads, whether the file carries the checksum seal (core/h5.hpp), and for messages
-/// what it is and who writes it. Every writer stamps a format with write_common (core/output.hpp), every
+/// what it is and who writes it. Every writer stamps a format with write_common (core/schema/common.hpp), every
 /// reader checks it with check_format, from these rows alone.
 struct Format {
   const char* name;
@@ -34,8 +34,8 @@ inline constexpr Format kSnapshot{"snapshot", 1, 1, false, "snapshot", "cgd-gene
 inline constexpr Format kSeries{"series", 1, 1, false, "series file", "cgd-generate or cgd-coarse"};
 inline constexpr Format kCheckpoint{"checkpoint", 3, 1, true, "checkpoint",
                                     "the checkpoint.h5 of a run directory, written by cgd-generate or cgd-coarse"};
-inline constexpr Format kFiltered{"filtered", 1, 1, false, "filtered file", "cgd-filter"};
-inline constexpr Format kDragModel{"drag_model", 1, 1, false, "drag model file", "cgd-fit"};
+inline constexpr Format kFiltered{"filtered", 2, 1, false, "filtered file", "cgd-filter"};
+inline constexpr Format kDragModel{"drag_model", 2, 1, false, "drag model file", "cgd-fit"};
 inline constexpr Format kCoarseSummary{"coarse_summary", 1, 1, false, "coarse summary",
                                        "cgd-coarse (a coarse run's summary.h5, or --summarise)"};
 
