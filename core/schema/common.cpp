@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <array>
 #include <cstring>
 #include <ctime>
@@ -20,6 +21,12 @@ namespace cgd::schema {
 namespace {
 
 using namespace names;
+
+std::string number(double x) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.9g", x);
+  return buf;
+}
 
 std::vector<double> as_vector(const Vec3& v) {
   return {v.begin(), v.end()};
@@ -157,6 +164,41 @@ void write_common(h5::File& file, const Format& format, const Scene& scene) {
 }
 
 using namespace names;
+
+void write_physical_system(h5::File& f, const PhysicalSystem& system, const char* law_key) {
+  f.set_attr("/", law_key, std::string(to_string(system.micro_drag)));
+  for (const SystemAttribute& field : kSystemAttributes) f.set_attr("/", field.file_key, system.*field.member);
+}
+
+PhysicalSystem read_physical_system(const h5::File& f, const char* law_key, const std::string& what) {
+  const std::string& path = f.path();
+  auto need = [&](const char* key) {
+    if (!f.has_attr("/", key)) throw InputError(path + ": " + what + " lacks the root attribute " + key);
+  };
+  need(law_key);
+  // every field of a physical system is a size, a density, a speed or a viscosity: finite and positive
+  auto positive_attr = [&](const char* key) {
+    const double v = schema::finite_attr(f, "/", key);
+    if (!(v > 0))
+      throw InputError(path + ": attribute '" + key + "' of '/' is " + number(v) + ", expected a positive number");
+    return v;
+  };
+  PhysicalSystem s;
+  for (const SystemAttribute& field : kSystemAttributes) {
+    if (field.member == &PhysicalSystem::gravity_m_s2) continue;  // optional in older files: below
+    need(field.file_key);
+    s.*field.member = positive_attr(field.file_key);
+  }
+  const std::string law = f.attr_string("/", law_key);
+  if (const auto micro = microscopic_drag_law(law))
+    s.micro_drag = *micro;
+  else
+    throw InputError(path + ": " + law_key + " = \"" + law + "\": the " + what +
+                     "'s law must be a microscopic law (" + drag_law_names(DragKind::Micro) + ")");
+  s.gravity_m_s2 = f.has_attr(kRoot, kGravity) ? positive_attr(kGravity)
+                                                   : gravity_from_scales(s.u_t_m_s, s.l_char_m, s.diameter_m);
+  return s;
+}
 
 RunPhysics read_run_physics(const h5::File& f) {
   RunPhysics p;

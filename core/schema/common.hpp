@@ -36,7 +36,7 @@ inline constexpr const char* kParams = "/params";
 inline constexpr const char* kSceneName = "scene_name";
 inline constexpr const char* kHasFluid = "has_fluid";
 inline constexpr const char* kBoxSize = "box_size_m";
-inline constexpr const char* kGravity = "gravity_m_s2";
+inline constexpr const char* kGravity = "gravity_m_s2";  // /params: the vector g; the filtered and model files' root: |g|
 inline constexpr const char* kDiameter = "diameter_m";
 inline constexpr const char* kDensity = "density_kg_m3";
 inline constexpr const char* kSolidsFraction = "solids_fraction";
@@ -80,6 +80,32 @@ struct RunPhysics {
   /// naming the scene when the run has no fluid or its law `drag` is not microscopic (a coarse run's).
   PhysicalSystem system() const;
 };
+
+/// The physical system's numeric fields as root attributes of the filtered and drag model files, in the order
+/// compare_systems compares them: the attribute name, the scene key (for messages), the member.
+struct SystemAttribute {
+  const char* file_key;
+  const char* scene_key;
+  double PhysicalSystem::*member;
+};
+inline constexpr SystemAttribute kSystemAttributes[] = {
+    {"diameter_m", "particles.diameter", &PhysicalSystem::diameter_m},
+    {"particle_density_kg_m3", "particles.density", &PhysicalSystem::particle_density_kg_m3},
+    {"fluid_density_kg_m3", "fluid.density", &PhysicalSystem::fluid_density_kg_m3},
+    {"fluid_viscosity_Pa_s", "fluid.viscosity", &PhysicalSystem::fluid_viscosity_Pa_s},
+    {"gravity_m_s2", "|domain.gravity|", &PhysicalSystem::gravity_m_s2},
+    {"u_t_m_s", "u_t (derived)", &PhysicalSystem::u_t_m_s},
+    {"l_char_m", "L_char (derived)", &PhysicalSystem::l_char_m},
+};
+
+/// Writes the system as root attributes of `f`, the law under `law_key` (names::kMicroLawAttribute; version-1 model files: base_drag).
+void write_physical_system(h5::File& f, const PhysicalSystem& system, const char* law_key);
+
+/// Reads the system from the root attributes of `f` (the law under `law_key`). `what` names the kind of
+/// file in messages ("filtered file", "drag model file"). InputError naming the file and the key for a
+/// missing attribute or a law that is not microscopic ("<path>: <law_key> = \"radl2014\": ..."). A file
+/// without gravity_m_s2 gets gravity_from_scales (older filtered files).
+PhysicalSystem read_physical_system(const h5::File& f, const char* law_key, const std::string& what);
 
 /// /params of `f` (and the root attribute `scene`): every attribute the reader takes, of its type, finite,
 /// and positive where a size or a density must be. InputError naming the file and the attribute.

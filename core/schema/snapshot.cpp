@@ -31,7 +31,6 @@ struct ParticleArray {
   bool required;
 };
 
-
 }  // namespace
 
 void write_snapshot(const std::string& path, MPI_Comm comm, const Scene& scene, double time_s,
