@@ -30,6 +30,11 @@ struct Format {
 /// anchors instead of one displacement bound) because a restart must not run on damaged
 /// bytes and users have no reason to edit them; every other format is read and validated by its content,
 /// so a file a researcher edited with h5py stays readable (docs/schema-run.md "Seal and validation").
+/// The filtered and drag model files are at version 2 since they spell each idea once (the micro law
+/// `micro_drag`, the calibration operator "box"/"grid"); their version-1 files are read through one upgrade
+/// path each (upgrade_version1 in core/schema/filtered.cpp and drag_model.cpp; docs/schema-filtered.md and
+/// docs/schema-drag-model.md "Versions"), because filtered files cost hours to make again and model files'
+/// checksums are recorded by the runs and exports that used them (data/models/half_box.h5 among them).
 inline constexpr Format kSnapshot{"snapshot", 1, 1, false, "snapshot", "cgd-generate or cgd-coarse"};
 inline constexpr Format kSeries{"series", 1, 1, false, "series file", "cgd-generate or cgd-coarse"};
 inline constexpr Format kCheckpoint{"checkpoint", 3, 1, true, "checkpoint",

@@ -21,7 +21,8 @@ Two more checks of "one home per format, one spelling per idea" (issue 30):
   the schema's structs (NAMES_OUTSIDE_ALLOWED lists exceptions, and is empty).
 - the retired spellings of version-1 files (base_drag, "tsc-grid", "tsc-deposit-interpolate") appear, outside
   comments, only in their format's upgrade path: core/schema/drag_model.cpp, core/schema/filtered.cpp and
-  tools/cgd_schema.py; no other tool or stage reads or writes them.
+  tools/cgd_schema.py; no other tool or stage reads or writes them; and the Python upgrade path spells what the
+  C++ one does and reads the shipped version-1 model data/models/half_box.h5 alike.
 Run by CTest (schema_tool_names).
 """
 import ast
@@ -150,6 +151,41 @@ def names_outside_schema():
     return problems, scanned
 
 
+def upgrade_paths_agree():
+    """Problems: the Python upgrade path (tools/cgd_schema.py) spells what the C++ one does -- today's micro-law
+    attribute and grid operator, version 1's spellings per format -- and reads the shipped version-1 model
+    data/models/half_box.h5 as the C++ reader does (micro law beetstra, operator grid: DragModelSchema.
+    TheShippedModelStillReads)."""
+    sys.path.insert(0, os.path.join(ROOT, "tools"))
+    import cgd_schema
+    problems = []
+
+    def constant(source, name):
+        m = re.search(r"constexpr const char\* " + name + r" = \"([^\"]+)\";", open(os.path.join(ROOT, source)).read())
+        return m.group(1) if m else None
+
+    expected = [
+        ("core/schema/common.hpp", "kMicroLawAttribute", cgd_schema.MICRO_LAW),
+        ("core/schema/drag_model.cpp", "kVersion1MicroLawAttribute", cgd_schema.VERSION1_MICRO_LAW["drag_model"]),
+        ("core/schema/drag_model.cpp", "kVersion1GridOperator", cgd_schema.VERSION1_GRID_OPERATOR["drag_model"]),
+        ("core/schema/filtered.cpp", "kVersion1GridOperator", cgd_schema.VERSION1_GRID_OPERATOR["filtered"]),
+    ]
+    for source, name, python in expected:
+        cpp = constant(source, name)
+        if cpp != python:
+            problems.append(f"{source}: {name} = {cpp!r}, tools/cgd_schema.py says {python!r}")
+    if '{CalibrationOperator::Grid, "grid"}' not in open(os.path.join(ROOT, "core/schema/calibration.cpp")).read() or \
+            cgd_schema.GRID != "grid":
+        problems.append("core/schema/calibration.cpp and tools/cgd_schema.py disagree on the grid operator's spelling")
+    import h5py
+    with h5py.File(os.path.join(ROOT, "data", "models", "half_box.h5"), "r") as f:
+        got = (int(f.attrs["cgd_format_version"]), cgd_schema.micro_law(f.attrs), cgd_schema.calibration_operator(f.attrs))
+    if got != (1, "beetstra", "grid"):
+        problems.append(f"data/models/half_box.h5 through tools/cgd_schema.py: (version, micro law, operator) = {got}, "
+                        "expected (1, 'beetstra', 'grid') as core/schema/drag_model.cpp reads it")
+    return problems
+
+
 def documented(part, names):
     # a prefix such as "width_" (of /width_<k>) stands for the names it begins
     return part in names or (part.endswith("_") and any(n.startswith(part) for n in names))
@@ -187,6 +223,9 @@ def main():
         print("FAIL: scanned fewer than 100 sources: the folders of this test are out of date")
         return 1
     problems += outside
+    upgrade = upgrade_paths_agree()
+    print(f"tool_names: the Python and C++ upgrade paths of version-1 files: {'OK' if not upgrade else 'disagree'}")
+    problems += upgrade
     for p in problems:
         print(p)
     print(f"tool_names: {count} lookups in {len(files)} tools: {'OK' if not problems else str(len(problems)) + ' not in the schema'}")
