@@ -10,7 +10,6 @@ namespace cgd::checkpoint {
 
 using namespace names;
 
-
 void write(const std::string& path, MPI_Comm comm, const Scene& scene, const RunState& state,
            const ParticleRows& particles, const FluidRows* fluid) {
   int ranks = 1;
@@ -69,7 +68,6 @@ void write(const std::string& path, MPI_Comm comm, const Scene& scene, const Run
 }
 
 namespace {
-
 
 std::int64_t sum(const std::vector<std::int64_t>& v) {
   std::int64_t s = 0;
