@@ -36,7 +36,8 @@
 #include "core/mpi_init.hpp"
 #include "core/cli.hpp"
 #include "core/error.hpp"
-#include "core/output.hpp"
+#include "core/schema/series.hpp"
+#include "core/schema/snapshot.hpp"
 #include "core/scene.hpp"
 #include "core/timers.hpp"
 #include "sim/dem/placement.hpp"
@@ -181,7 +182,7 @@ int main(int argc, char** argv) {
     c.wall_s = per_step(wall);
     const char* names[] = {"neighbor",        "comm",           "force_integrate",  "coupling",   "fluid_predictor",
                            "fluid_pressure",  "fluid_correction", "diagnostics",     "output",     "checkpoint"};
-    for (const char* n : names) c.phase_s[n] = per_step(series.column(std::string("time_") + n + "_s"));
+    for (const char* n : names) c.phase_s[n] = per_step(series.column(cgd::schema::phase_column(n)));
     // the step-0 snapshot (and series write) lands in the first interval's "output"
     const std::vector<double>& out = series.column("time_output_s");
     const double snapshot_s = out[1] - out[0];

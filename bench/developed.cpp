@@ -60,7 +60,7 @@
 #endif
 
 #include "core/mpi_init.hpp"
-#include "core/checkpoint.hpp"
+#include "core/schema/checkpoint.hpp"
 #include "core/cli.hpp"
 #include "core/error.hpp"
 #include "core/scene.hpp"

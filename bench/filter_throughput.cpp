@@ -34,7 +34,7 @@ int main(int argc, char** argv) {
   const long n_particles = argc > 1 ? std::atol(argv[1]) : 457000;
   const int repeats = argc > 2 ? std::atoi(argv[2]) : 3;
   const double d = 75e-6, L[3] = {106 * d, 426 * d, 106 * d};
-  Snapshot s;
+  schema::Snapshot s;
   s.has_fluid = true;
   s.grid.cells = {32, 128, 32};
   for (int a = 0; a < 3; ++a) s.grid.spacing_m[a] = L[a] / s.grid.cells[a];

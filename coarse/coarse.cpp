@@ -8,7 +8,8 @@
 #include "core/error.hpp"
 #include "core/h5.hpp"
 #include "core/schema/coarse_summary.hpp"
-#include "core/output.hpp"
+#include "core/schema/series.hpp"
+#include "core/schema/snapshot.hpp"
 
 namespace cgd::coarse {
 

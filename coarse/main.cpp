@@ -11,7 +11,7 @@
 #include "coarse/coarse.hpp"
 #include "core/cli.hpp"
 #include "core/error.hpp"
-#include "core/checkpoint.hpp"
+#include "core/schema/checkpoint.hpp"
 #include "core/scene.hpp"
 #include "sim/run.hpp"
 

@@ -173,7 +173,7 @@ std::vector<std::string> model_calibration_warnings(const DragModel& m, double d
                     " d_p: the table is applied unchanged (it has no width dependence)");
   } else if (delta_m < *lo * (1 - 1e-6) || delta_m > *hi * (1 + 1e-6)) {
     out.push_back(m.path + " was calibrated on coarse grids of cell " + number(*lo / d) + " to " + number(*hi / d) +
-                  " d_p (operator tsc-grid), and this run's Delta (its cell times fluid.filter_to_grid_ratio) of " + number(delta_m / d) +
+                  " d_p (operator grid), and this run's Delta (its cell times fluid.filter_to_grid_ratio) of " + number(delta_m / d) +
                   " d_p lies outside: the width dependence 1/(1 + a F^n) is extrapolated");
   }
   return out;

@@ -1,15 +1,14 @@
 #pragma once
 // The physical system a derived file was made for (docs/models.md's u_t and L_char conventions): the
 // particle diameter and density, the fluid density and viscosity, |g|, the derived u_t and L_char, and
-// the microscopic drag law the file's numbers are relative to. One record, one attribute writer, one
-// reader and one tolerance-based comparison, used by every file that carries it:
+// the microscopic drag law the file's numbers are relative to. One record and one tolerance-based
+// comparison, used by every file that carries it; its attribute names, writer and reader are the schema
+// layer's (core/schema/common.hpp: kSystemAttributes, write_physical_system, read_physical_system):
 //   filtered files (cgd-filter, docs/schema-filtered.md): root attributes, the law under `micro_drag`;
-//   drag model files (cgd-fit, docs/schema-drag-model.md): root attributes, the law under `base_drag`;
-//   snapshots (/params, written by core/output.cpp): RunPhysics::system() (core/snapshot.hpp);
+//   drag model files (cgd-fit, docs/schema-drag-model.md): root attributes, the law under `micro_drag`;
+//   snapshots (/params, written by core/schema/common.cpp): RunPhysics::system() (core/schema/common.hpp);
 //   scenes: physical_system(scene).
-// The attribute names are those of the two derived formats: diameter_m, particle_density_kg_m3,
-// fluid_density_kg_m3, fluid_viscosity_Pa_s, gravity_m_s2 (|g|), u_t_m_s, l_char_m.
-// Adding a field: the member, its row in kSystemFields (core/physical_system.cpp), the schema pages.
+// Adding a field: the member, its row in schema::kSystemAttributes (core/schema/common.hpp), the schema pages.
 #include <optional>
 #include <string>
 
@@ -18,9 +17,6 @@
 namespace cgd {
 
 struct Scene;
-namespace h5 {
-class File;
-}
 
 /// "schiller-naumann": the u_t convention of docs/models.md that every cgd file uses (the drag model
 /// file's attribute u_t_convention).
@@ -48,16 +44,7 @@ PhysicalSystem physical_system(const Scene& scene, DragLaw base_law = DragLaw::B
 /// written before gravity_m_s2 was stored (filtered files).
 double gravity_from_scales(double u_t_m_s, double l_char_m, double diameter_m);
 
-/// Writes the system as root attributes of `f`, the law under `law_key` ("micro_drag", "base_drag").
-void write_physical_system(h5::File& f, const PhysicalSystem& system, const char* law_key);
-
-/// Reads the system from the root attributes of `f` (the law under `law_key`). `what` names the kind of
-/// file in messages ("filtered file", "drag model file"). InputError naming the file and the key for a
-/// missing attribute or a law that is not microscopic ("<path>: <law_key> = \"radl2014\": ..."). A file
-/// without gravity_m_s2 gets gravity_from_scales (older filtered files).
-PhysicalSystem read_physical_system(const h5::File& f, const char* law_key, const std::string& what);
-
-/// The first field in which two systems differ: its file key (e.g. "diameter_m"), its scene key
+/// The first field in which two systems differ: its file key (e.g. "diameter_m", schema::kSystemAttributes), its scene key
 /// ("particles.diameter") and the two values as text.
 struct SystemDifference {
   std::string file_key, scene_key, first, second;

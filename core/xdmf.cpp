@@ -24,8 +24,8 @@
 
 #include "core/error.hpp"
 #include "core/h5.hpp"
-#include "core/output.hpp"
-#include "core/schema/snapshot_names.hpp"
+#include "core/xdmf.hpp"
+#include "core/schema/snapshot.hpp"
 #include "core/text_file.hpp"
 
 namespace cgd::schema {

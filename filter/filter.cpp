@@ -39,7 +39,7 @@ DragLaw micro_law(const RunPlan& run) {
                    "): a resolved run uses one");
 }
 
-DragParams drag_params(const RunPhysics& p) { return DragParams{p.fluid_density_kg_m3, p.fluid_viscosity_Pa_s, p.diameter_m}; }
+DragParams drag_params(const schema::RunPhysics& p) { return DragParams{p.fluid_density_kg_m3, p.fluid_viscosity_Pa_s, p.diameter_m}; }
 
 /// splitmix64 (Steele, Lea & Flood 2014): the hash that picks the random per-particle samples.
 std::uint64_t mix(std::uint64_t x) {
@@ -55,7 +55,7 @@ std::uint64_t mix(std::uint64_t x) {
 /// grid spacing (1e-6 relative). {key, value in a, value in b}, or nullopt.
 std::optional<std::array<std::string, 3>> pooling_difference(const RunPlan& a, const RunPlan& b) {
   if (const auto d = compare_systems(a.physics.system(), b.physics.system())) return {{d->scene_key, d->first, d->second}};
-  const RunPhysics &p = a.physics, &q = b.physics;
+  const schema::RunPhysics &p = a.physics, &q = b.physics;
   auto same = [](double x, double y) { return std::abs(x - y) <= 1e-6 * std::max(std::abs(x), std::abs(y)); };
   auto triple = [](const std::array<double, 3>& v) { return fmt(v[0]) + "," + fmt(v[1]) + "," + fmt(v[2]); };
   auto same3 = [&](const std::array<double, 3>& x, const std::array<double, 3>& y) {
@@ -115,7 +115,7 @@ CoarseGrid coarse_grid_of_scene(const std::string& scene_toml, const std::string
   return c;
 }
 
-std::vector<double> coarse_grid_fields(const Snapshot& s, const CoarseGrid& coarse, double particle_volume_m3) {
+std::vector<double> coarse_grid_fields(const schema::Snapshot& s, const CoarseGrid& coarse, double particle_volume_m3) {
   const PeriodicGrid& G = coarse.grid;
   // 1. the coarse run's solids fraction: the TSC deposit of the particles' volume, with the floor
   std::vector<double> phi = tsc_deposit_solids_fraction(G, s.position, {particle_volume_m3});
@@ -181,7 +181,7 @@ FilterPlan plan_filter(const FilterOptions& o) {
                               std::to_string(run.directory.snapshot_files.size()) + " complete snapshots");
     bool first = true;
     for (const std::string& file : run.directory.snapshot_files) {
-      const Snapshot head = read_snapshot(file, SnapshotContent::HeaderOnly);
+      const schema::Snapshot head = schema::read_snapshot(file, schema::SnapshotContent::HeaderOnly);
       if (first) {
         run.physics = head.physics;
         if (!head.has_fluid || !head.physics.has_fluid)
@@ -267,7 +267,7 @@ FilterPlan plan_filter(const FilterOptions& o) {
   return plan;
 }
 
-SnapshotResult filter_snapshot(const Snapshot& s, const FilterPlan& plan, const FilterOptions& o,
+SnapshotResult filter_snapshot(const schema::Snapshot& s, const FilterPlan& plan, const FilterOptions& o,
                                std::int64_t snapshot_row, std::size_t run_index) {
   const RunPlan& run = plan.runs[run_index];
   if (s.drag_coefficient.empty() || !s.has_fluid)

@@ -22,7 +22,8 @@
 
 #include <mpi.h>
 
-#include "core/snapshot.hpp"
+#include "core/run_directory.hpp"
+#include "core/schema/snapshot.hpp"
 
 namespace cgd::filter {
 
@@ -58,7 +59,7 @@ struct RunPlan {
   std::vector<std::string> files;              // snapshots used, time order
   std::vector<double> times_s;
   std::vector<std::int64_t> steps;
-  RunPhysics physics;
+  schema::RunPhysics physics;
   PeriodicGrid grid;
   std::vector<CoarseGrid> coarse;              // one per FilterPlan::grids entry
 };
@@ -87,7 +88,7 @@ CoarseGrid coarse_grid_of_scene(const std::string& scene_toml, const std::string
 /// phi (TSC deposit of the particles' volume, conservative floor), Favre velocity u (3: box average
 /// of eps u_c over the cell / box average of eps), central-difference gradient of the cell-averaged
 /// pressure (3). `fine` is the box filter of (eps, eps u_c, p) of the snapshot.
-std::vector<double> coarse_grid_fields(const Snapshot& snapshot, const CoarseGrid& coarse, double particle_volume_m3);
+std::vector<double> coarse_grid_fields(const schema::Snapshot& snapshot, const CoarseGrid& coarse, double particle_volume_m3);
 
 /// Default widths: the multiples k of the cell size h (cube root of the cell volume) with
 /// 3 k h <= the shortest box edge of every run.
@@ -123,7 +124,7 @@ struct SnapshotResult {
 };
 
 /// Filters one snapshot (already read) for every width of the plan.
-SnapshotResult filter_snapshot(const Snapshot& snapshot, const FilterPlan& plan, const FilterOptions& options,
+SnapshotResult filter_snapshot(const schema::Snapshot& snapshot, const FilterPlan& plan, const FilterOptions& options,
                                std::int64_t snapshot_row, std::size_t run_index);
 
 /// The whole job: snapshots distributed over the ranks of `comm`, statistics and the file on rank 0

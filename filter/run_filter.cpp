@@ -16,7 +16,8 @@
 #include "core/error.hpp"
 #include "core/schema/filtered.hpp"
 #include "core/timers.hpp"
-#include "core/output.hpp"
+#include "core/schema/series.hpp"
+#include "core/schema/snapshot.hpp"
 #include "core/scene.hpp"
 #include "filter/filter.hpp"
 #include "filter/statistics.hpp"
@@ -329,7 +330,7 @@ void write_filtered_file(const FilterPlan& plan, const FilterOptions& o, const s
                          const Statistics& st, const std::vector<std::string>& checksums,
                          const std::vector<EquivalentWidth>& equivalent) {
   const RunPlan& r0 = plan.runs.front();
-  const RunPhysics& p = r0.physics;
+  const schema::RunPhysics& p = r0.physics;
   const std::size_t n_widths = plan.columns(), n_bins = plan.bin_edges.size() - 1, whole_col = plan.whole_box_column();
   schema::Filtered out;
   out.scene_toml = p.scene_toml;
@@ -445,7 +446,7 @@ std::size_t run_filter(const FilterOptions& o, MPI_Comm comm) {
       for (std::size_t k = static_cast<std::size_t>(rank); k < rows; k += static_cast<std::size_t>(size)) {
         const auto [r, i] = row_of[k];
         const double t0 = wall_seconds();
-        const Snapshot snap = read_snapshot(plan.runs[r].files[i]);
+        const schema::Snapshot snap = schema::read_snapshot(plan.runs[r].files[i]);
         checksums[k] = file_checksum_fnv1a(plan.runs[r].files[i]);
         read_s += wall_seconds() - t0;
         SnapshotResult res = filter_snapshot(snap, plan, o, static_cast<std::int64_t>(k), r);
@@ -527,7 +528,7 @@ std::size_t run_filter(const FilterOptions& o, MPI_Comm comm) {
         const std::vector<EquivalentWidth> equivalent = equivalent_widths(plan, st);
         write_filtered_file(plan, o, sums, out_of_range, samples, st, checksums, equivalent);
         if (!o.quiet) {
-          const RunPhysics& p = plan.runs.front().physics;
+          const schema::RunPhysics& p = plan.runs.front().physics;
           std::cerr << "cgd-filter: wrote " << o.output_path << " in " << wall_seconds() - t_start << " s (reading "
                     << times[0] << " s, filtering " << times[1] << " s = "
                     << (times[1] > 0 ? static_cast<double>(particle_widths) / times[1] : 0.0)

@@ -162,7 +162,7 @@ ExportedModel from_model(const DragModel& m, const std::string& name, const std:
   e.c_corr_a = m.c_corr_a;
   e.c_corr_k = m.c_corr_k;
   e.diameter_m = m.diameter_m;
-  e.base_drag = to_string(m.micro_drag);
+  e.micro_drag = to_string(m.micro_drag);
   e.calibrated_delta_m = m.calibrated_delta_m;
   std::sort(e.calibrated_delta_m.begin(), e.calibrated_delta_m.end());
   const double d = m.diameter_m;
@@ -170,7 +170,7 @@ ExportedModel from_model(const DragModel& m, const std::string& name, const std:
   e.provenance.push_back("curves: " + std::string(m.table ? "table (cgd-fit --grid-table " +
                                                                 std::to_string(m.table_cells_across) + ")"
                                                           : "splines") +
-                         ", calibration operator " + names_of(m.calibration_operator).model_file + ", base law " + e.base_drag +
+                         ", calibration operator " + to_string(m.calibration_operator) + ", base law " + e.micro_drag +
                          ", c_corr source " + m.c_corr_source);
   if (!e.calibrated_delta_m.empty()) {
     std::string cal = "calibrated Delta:";
@@ -207,7 +207,7 @@ ExportedModel from_radl2014(double l_char_m, double diameter_m, const std::strin
   e.c_corr_a = Radl2014Curves::kCcorrA;
   e.c_corr_k = Radl2014Curves::kCcorrK;
   e.diameter_m = diameter_m;
-  e.base_drag = "beetstra";
+  e.micro_drag = "beetstra";
   e.provenance.push_back(
       "curves: Radl & Sundaresan (2014), Chem. Eng. Sci. 117:416, as cgd's radl2014 law evaluates them "
       "(data/reference/radl2014-filtered-drag.csv: a(phi) on 0.25-0.40 with c1 = -8.82 as in MFiX, h = 0 at phi >= 0.60)");
@@ -259,7 +259,7 @@ std::string c_header(const ExportedModel& e) {
     << " *   c_corr(alpha) = a_c + (1 - a_c) exp(-k_c (alpha - 1)),  a_c = " << c_number(e.c_corr_a)
     << ", k_c = " << c_number(e.c_corr_k) << ",\n"
     << " *   phi = solids fraction at the parcel (1 - the void fraction the code's drag uses), Delta = cube root of the\n"
-    << " *   fluid cell volume (m, > 0), alpha = d_parcel / d_primary (>= 1); beta_micro = the base law (" << e.base_drag
+    << " *   fluid cell volume (m, > 0), alpha = d_parcel / d_primary (>= 1); beta_micro = the base law (" << e.micro_drag
     << ")\n"
     << " *   evaluated with the PRIMARY diameter and the parcel's slip |u - v|, per primary; a parcel carries alpha^3\n"
     << " *   primaries' drag (docs/models.md \"Parcels\"). The base law is not in this header.\n"

@@ -53,7 +53,7 @@ struct ExportedModel {
   double log_a_min = -HUGE_VAL, log_a_max = HUGE_VAL;
   double c_corr_a = 0, c_corr_k = 0.05;
   double diameter_m = 0;  // 0: unknown (--l-char-m without a scene)
-  std::string base_drag;  // the micro law beta_micro (not in the header)
+  std::string micro_drag;  // the micro law beta_micro (not in the header)
   std::vector<double> calibrated_delta_m;
   std::vector<std::string> provenance;  // one line each, for the header's comment and the CSVs' heads
 };

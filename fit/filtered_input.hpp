@@ -50,7 +50,7 @@ struct FilteredFile {
 /// dataset: docs/schema-filtered.md "What the reader checks") and keep what the fit uses.
 FilteredFile read_filtered_file(const std::string& path);
 
-/// The files as the fitter sees them for an operator: Box leaves them as read; TscGrid puts each file's
+/// The files as the fitter sees them for an operator: Box leaves them as read; Grid puts each file's
 /// coarse grids (/grids/<N>, then /whole_box as a check) in place of its box widths, so that every step
 /// of the fit (bins, splines, bootstrap, cross-validation) runs on H_grid with F = L_char / cell size.
 /// InputError naming the files when a file has no /grids (filter it with cgd-filter --grids).

@@ -50,8 +50,8 @@ struct FitOptions {
   bool cross_validate = true;        // leave-one-run-out
   double width_exponent = 1.0;       // n of 1/(1 + a F^n) (1: Radl & Sundaresan 2014)
   bool fit_width_exponent = false;   // step 0: fit n instead
-  // Box: the box widths (/width_<k>); TscGrid (--operator grid): the coarse grids' H_grid (/grids/<N>,
-  // Delta = the grid's cell size; select_operator) — the model file's operator is then "tsc-grid"
+  // Box: the box widths (/width_<k>); Grid (--operator grid): the coarse grids' H_grid (/grids/<N>,
+  // Delta = the grid's cell size; select_operator) — the model file's operator is then "grid"
   CalibrationOperator calibration_operator = CalibrationOperator::Box;
 };
 

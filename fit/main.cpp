@@ -66,7 +66,7 @@ int main(int argc, char** argv) {
     app.add_option("--operator", op,
                    "What the model is calibrated on: \"box\" (the box widths /width_<k>, default) or \"grid\" (H_grid "
                    "of the coarse grids /grids/<N> of cgd-filter --grids, Delta = the grid's cell size: what a coarse "
-                   "run applies; the model file's operator is then \"tsc-grid\")")
+                   "run applies; the model file's operator is then \"grid\" too)")
         ->type_name("box|grid");
     int grid_table = 0;
     app.add_option("--grid-table", grid_table,
@@ -124,15 +124,15 @@ int main(int argc, char** argv) {
       return cgd::kExitOk;
     }
 
-    const auto calibration = cgd::parse_calibration_operator(op, &cgd::CalibrationOperatorNames::option);
+    const auto calibration = cgd::parse_calibration_operator(op);
     if (!calibration)
       throw cgd::InputError("cgd-fit: --operator " + op + ": allowed " +
-                            cgd::calibration_operator_choices(&cgd::CalibrationOperatorNames::option));
+                            cgd::calibration_operator_choices());
     if (app.count("--grid-table") && grid_table < 1)
       throw cgd::InputError("cgd-fit: --grid-table " + std::to_string(grid_table) + ": allowed a number of cells across >= 1");
     options.calibration_operator = *calibration;
     // a grid equal to the resolved one is the identity (H_grid = 0 by construction): a check, not data
-    if (*calibration == cgd::CalibrationOperator::TscGrid && !app.count("--min-width-over-cell"))
+    if (*calibration == cgd::CalibrationOperator::Grid && !app.count("--min-width-over-cell"))
       options.min_width_over_cell = 1.01;
     // every input read and checked before anything is written
     std::vector<cgd::fit::FilteredFile> files;

@@ -217,7 +217,7 @@ std::string write_grid_table_model(const std::string& path, const std::vector<Fi
   M.width_exponent = 1.0;
   M.table = true;
   M.table_cells_across = cells_across;
-  M.calibration_operator = CalibrationOperator::TscGrid;
+  M.calibration_operator = CalibrationOperator::Grid;
   // c_corr = 1 (a = 1, k = 0): the table is the grid's a-priori closure alone; what parcels miss is measured
   // against it, not folded into it
   M.c_corr_a = 1.0, M.c_corr_k = 0.0, M.c_corr_source = "none";
@@ -252,7 +252,7 @@ std::string fit_report(const FitResult& R, const std::vector<FilteredFile>& file
   const bool n1 = R.model.width_exponent == 1.0;
   const std::string form = n1 ? "1/(1 + aF)" : "1/(1 + aF^n)";
   out << "cgd-fit: H(F, phi) = h(phi)/(1 + a(phi) F" << (n1 ? "" : "^n") << "), F = L_char/Delta";
-  out << (o.calibration_operator == CalibrationOperator::TscGrid ? " (operator tsc-grid: H_grid of the coarse grids, Delta = cell size)"
+  out << (o.calibration_operator == CalibrationOperator::Grid ? " (operator grid: H_grid of the coarse grids, Delta = cell size)"
                                            : " (operator box: box filters of width Delta)");
   if (!n1 || o.fit_width_exponent) out << ", n = " << format("%.3f", R.model.width_exponent);
   out << "; " << files.size()

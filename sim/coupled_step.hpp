@@ -6,7 +6,7 @@
 #include <functional>
 #include <memory>
 
-#include "core/checkpoint.hpp"
+#include "core/schema/checkpoint.hpp"
 #include "core/scene.hpp"
 #include "core/timers.hpp"
 #include "sim/coupling/coupler.hpp"

@@ -15,11 +15,13 @@
 #include <numbers>
 #include <sstream>
 
-#include "core/checkpoint.hpp"
+#include "core/schema/checkpoint.hpp"
 #include "core/error.hpp"
 #include "core/h5.hpp"
-#include "core/output.hpp"
-#include "core/series.hpp"
+#include "core/schema/series.hpp"
+#include "core/schema/snapshot.hpp"
+#include "core/xdmf.hpp"
+#include "core/schema/series.hpp"
 #include "core/text_file.hpp"
 #include "core/timers.hpp"
 #include "sim/coupled_step.hpp"
@@ -434,7 +436,7 @@ class RunDriver {
     series_.write((dir_ / "series.h5").string(), comm_, scene_);
   }
 
-  // ---- checkpoint (sim/run_checkpoint.hpp; layout: core/checkpoint.hpp) --------------------------
+  // ---- checkpoint (sim/run_checkpoint.hpp; layout: core/schema/checkpoint.hpp) --------------------------
   /// The run's book-keeping as the checkpoint keeps it, the same on every rank (rank 0's clock). Collective.
   RunBook book() const {
     RunBook b;

@@ -1,7 +1,7 @@
 #pragma once
 // A run of one scene, shared by cgd-generate and cgd-coarse: assembles the effects the scene calls for
 // into one time loop and owns the run directory (ARCHITECTURE.md "Files"): scene.toml, snapshots/snap_<step>.h5,
-// series.h5 (columns: core/series.hpp), checkpoint.h5 (core/checkpoint.hpp), run.xmf and the completion
+// series.h5 (columns: core/schema/series.hpp), checkpoint.h5 (core/schema/checkpoint.hpp), run.xmf and the completion
 // marker DONE, written last. The coupled step itself is sim/coupled_step.hpp; the run driver only
 // orchestrates: output, checkpoints, interruption, progress and the console.
 #include <mpi.h>

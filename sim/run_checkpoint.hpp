@@ -1,5 +1,5 @@
 #pragma once
-// The run's checkpoint.h5 (layout: core/checkpoint.hpp) as the run driver (sim/run.cpp) writes and loads
+// The run's checkpoint.h5 (layout: core/schema/checkpoint.hpp) as the run driver (sim/run.cpp) writes and loads
 // it: the particles with their contact histories, the DEM's rebuild state, the fluid (CoupledStep), and
 // the run's book-keeping (wall time, phase seconds, snapshot frames, placement method). A restart at any
 // rank count reads it back; at the same rank count each rank takes its own rows (bit-for-bit restarts).
@@ -9,7 +9,7 @@
 #include <string>
 #include <vector>
 
-#include "core/checkpoint.hpp"
+#include "core/schema/checkpoint.hpp"
 #include "core/scene.hpp"
 #include "sim/coupled_step.hpp"
 #include "sim/dem/system.hpp"

@@ -13,6 +13,8 @@ import sys
 import h5py
 import numpy as np
 
+import cgd_schema  # tools/cgd_schema.py: the spellings shared with core/schema/
+
 HERE = os.path.dirname(os.path.abspath(__file__))
 
 
@@ -69,7 +71,7 @@ def main():
         fig, ax = plt.subplots(figsize=(7.5, 5))
         colors = plt.rcParams["axes.prop_cycle"].by_key()["color"]
     table_phi = [float(x) for x in a.table_phi.split(",")]
-    print(f"{a.file}: H = 1 - beta_bar/beta_micro ({f.attrs['micro_drag']}), 95 % block-bootstrap intervals; "
+    print(f"{a.file}: H = 1 - beta_bar/beta_micro ({cgd_schema.micro_law(f.attrs)}), 95 % block-bootstrap intervals; "
           f"Radl 2014 = h/(1 + a F) at the same F")
     print(f"{'width/d_p':>9} {'F':>6} " + " ".join(f"{'phi=' + str(p):>26}" for p in table_phi))
     for n, g in enumerate(widths(f)):

@@ -13,6 +13,8 @@ import argparse
 import os
 
 import h5py
+
+import cgd_schema  # tools/cgd_schema.py: the spellings shared with core/schema/
 import matplotlib
 
 matplotlib.use("Agg")
@@ -68,7 +70,7 @@ def main():
         bins = {k: f["bins"][k][()] for k in f["bins"]}
         th, ch, kh = f["h/knots"][()], f["h/coefficients"][()], int(f["h"].attrs["order"])
         phi_crit, h_max = float(f.attrs["phi_crit"]), float(f.attrs["h_max"])
-        base = f.attrs["base_drag"]
+        base = cgd_schema.micro_law(f.attrs)
         cv = f["diagnostics"].attrs["cv_rms_H"]
         n = float(f.attrs.get("width_exponent", 1.0))  # absent in files older than the attribute: 1
     rh, ra = radl2014()

@@ -1,25 +1,33 @@
-// The calibration operator's spellings (core/schema/calibration.hpp).
+// The calibration operator's one spelling (core/schema/calibration.hpp).
 #include "core/schema/calibration.hpp"
 
 namespace cgd {
 
-const CalibrationOperatorNames& names_of(CalibrationOperator op) {
-  for (const CalibrationOperatorNames& n : kCalibrationOperators)
-    if (n.op == op) return n;
-  return kCalibrationOperators[0];  // unreachable: every enumerator has its row
+namespace {
+
+struct OperatorName {
+  CalibrationOperator op;
+  const char* text;
+};
+constexpr OperatorName kOperators[] = {{CalibrationOperator::Box, "box"}, {CalibrationOperator::Grid, "grid"}};
+
+}  // namespace
+
+const char* to_string(CalibrationOperator op) {
+  for (const OperatorName& n : kOperators)
+    if (n.op == op) return n.text;
+  return kOperators[0].text;  // unreachable: every enumerator has its row
 }
 
-std::optional<CalibrationOperator> parse_calibration_operator(const std::string& text,
-                                                              const char* CalibrationOperatorNames::*place) {
-  for (const CalibrationOperatorNames& n : kCalibrationOperators)
-    if (text == n.*place) return n.op;
+std::optional<CalibrationOperator> parse_calibration_operator(const std::string& text) {
+  for (const OperatorName& n : kOperators)
+    if (text == n.text) return n.op;
   return std::nullopt;
 }
 
-std::string calibration_operator_choices(const char* CalibrationOperatorNames::*place) {
+std::string calibration_operator_choices() {
   std::string out;
-  for (const CalibrationOperatorNames& n : kCalibrationOperators)
-    out += (out.empty() ? "\"" : " or \"") + std::string(n.*place) + "\"";
+  for (const OperatorName& n : kOperators) out += (out.empty() ? "\"" : " or \"") + std::string(n.text) + "\"";
   return out;
 }
 

@@ -3,7 +3,7 @@
 
 #include "core/error.hpp"
 #include "core/h5.hpp"
-#include "core/output.hpp"
+#include "core/schema/common.hpp"
 #include "core/schema/check.hpp"
 
 namespace cgd::schema {

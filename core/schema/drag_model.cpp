@@ -6,7 +6,7 @@
 
 #include "core/error.hpp"
 #include "core/h5.hpp"
-#include "core/output.hpp"
+#include "core/schema/common.hpp"
 #include "core/schema/check.hpp"
 
 namespace cgd::schema {
@@ -48,6 +48,22 @@ constexpr const char* kProvenance = "/provenance";
 constexpr const char* kProvenanceKeys[] = {"made_by", "resolved_runs", "valid_for", "validation"};
 constexpr const char* kCCorrFormula = "c_corr = a + (1 - a) exp(-k (alpha - 1))";
 constexpr const char* kChecksumKind = "FNV-1a 64-bit of the file's bytes, hex";
+
+/// The spellings that changed with version 2 (docs/schema-drag-model.md "Versions"): version 2 stores the
+/// micro law under `micro_drag` and the grid operator as "grid", the spellings of the filtered file and of
+/// cgd-fit --operator; version 1 (the files written before, among them data/models/half_box.h5, whose
+/// checksum runs and exports record) stored `base_drag` and "tsc-grid". The one upgrade path: upgrade_version1
+/// maps these two spellings of a version-1 file and nothing else; a version-2 file must use the new ones.
+constexpr const char* kVersion1MicroLawAttribute = "base_drag";
+constexpr const char* kVersion1GridOperator = "tsc-grid";
+struct Spelling {
+  const char* law_attribute;
+  const char* grid_operator;
+};
+Spelling upgrade_version1(std::int64_t version) {
+  if (version == 1) return {kVersion1MicroLawAttribute, kVersion1GridOperator};
+  return {names::kMicroLawAttribute, to_string(CalibrationOperator::Grid)};
+}
 
 /// Named members of a group's struct, for writing and reading them alike.
 template <class S>
@@ -142,8 +158,8 @@ void write_root(h5::File& f, const M& m) {
     f.set_attr("/", kWidthExponentLow, m.width_exponent_low);
     f.set_attr("/", kWidthExponentHigh, m.width_exponent_high);
   }
-  const bool grid = m.calibration_operator == CalibrationOperator::TscGrid;
-  f.set_attr("/", kOperator, std::string(names_of(m.calibration_operator).model_file));
+  const bool grid = m.calibration_operator == CalibrationOperator::Grid;
+  f.set_attr("/", kOperator, std::string(to_string(m.calibration_operator)));
   if (grid) f.set_attr("/", kKernel, std::string("tsc"));
   f.set_attr("/", kCurves, std::string(to_string(m.curves)));
   if (m.curves == ModelCurves::Table) f.set_attr("/", kTableCellsAcross, m.table_cells_across);
@@ -152,7 +168,7 @@ void write_root(h5::File& f, const M& m) {
     f.set_attr("/", kCalibratedDeltaOverDp, m.calibrated_delta_over_dp);
   }
   if (grid && !m.calibrated_cells_across.empty()) f.set_attr("/", kCalibratedCellsAcross, m.calibrated_cells_across);
-  write_physical_system(f, m.system, kModelMicroLawAttribute);
+  write_physical_system(f, m.system, names::kMicroLawAttribute);
   f.set_attr("/", kUtConventionAttribute, m.u_t_convention);
   f.set_attr("/", kPhiCrit, m.phi_crit);
   f.set_attr("/", kPhiMax, m.phi_max);
@@ -318,14 +334,14 @@ SplineRecord read_spline(const h5::File& f, const char* group) {
   return s;
 }
 
-void read_calibration(const h5::File& f, M& m) {
+void read_calibration(const h5::File& f, M& m, const Spelling& spelling) {
   if (f.has_attr("/", kOperator)) {
     const std::string text = f.attr_string("/", kOperator);
-    const auto op = parse_calibration_operator(text, &CalibrationOperatorNames::model_file);
-    if (!op)
-      refuse(f, "attribute 'operator' of '/' is \"" + text + "\", expected " +
-                    calibration_operator_choices(&CalibrationOperatorNames::model_file));
-    m.calibration_operator = *op;
+    const char* box = to_string(CalibrationOperator::Box);
+    if (text != box && text != spelling.grid_operator)
+      refuse(f, "attribute 'operator' of '/' is \"" + text + "\", expected \"" + box + "\" or \"" +
+                    spelling.grid_operator + "\" (cgd_format_version " + std::to_string(m.version) + ")");
+    m.calibration_operator = text == box ? CalibrationOperator::Box : CalibrationOperator::Grid;
   }
   if (f.has_attr("/", kCurves)) {
     const std::string text = f.attr_string("/", kCurves);
@@ -341,7 +357,8 @@ void read_calibration(const h5::File& f, M& m) {
 
 void read_root(const h5::File& f, M& m) {
   for (const char* key : {kUtConventionAttribute, kPhiCrit, kHMax}) require_attr(f, "/", key);
-  m.system = read_physical_system(f, kModelMicroLawAttribute, "drag model file");
+  const Spelling spelling = upgrade_version1(m.version);
+  m.system = read_physical_system(f, spelling.law_attribute, "drag model file");
   if (!(m.system.l_char_m > 0))
     refuse(f, "attribute 'l_char_m' of '/' is " + number(m.system.l_char_m) + ", expected > 0");
   m.u_t_convention = f.attr_string("/", kUtConventionAttribute);
@@ -363,7 +380,7 @@ void read_root(const h5::File& f, M& m) {
   if (!(m.log_a_min <= m.log_a_max))
     refuse(f, "attributes 'log_a_min' = " + number(m.log_a_min) + " and 'log_a_max' = " + number(m.log_a_max) +
                   " of '/': expected log_a_min <= log_a_max (either may be -inf or inf, neither NaN)");
-  read_calibration(f, m);
+  read_calibration(f, m, spelling);
   if (f.has_attr("/", "code_version")) m.code_version = f.attr_string("/", "code_version");
   if (f.has_attr("/", "created")) m.created = f.attr_string("/", "created");
   if (f.has_attr("/", "scene")) m.scene_toml = f.attr_string("/", "scene");
@@ -539,8 +556,8 @@ void write_c_corr_copy(const std::string& model_path, const std::string& output_
 
 DragModelFile read_drag_model(const std::string& path) {
   h5::File f = h5::File::open_read(path, MPI_COMM_SELF);
-  check_format(f, kDragModel);
   M m;
+  m.version = check_format(f, kDragModel);
   read_root(f, m);
   m.h = read_spline(f, kH);
   m.log_a = read_spline(f, kLogA);

@@ -2,7 +2,7 @@
 // The drag model file (cgd_format "drag_model", docs/schema-drag-model.md): its one home. The struct, the
 // attribute and dataset names (each spelled once, in the tables of drag_model.cpp and the constants below),
 // the closed choices as enums (the calibration operator of core/schema/calibration.hpp, the curves), one
-// write and one validating read. cgd-fit (fit/model_file.cpp) fills the struct; load_drag_model
+// write and one validating read (which upgrades the two spellings of version 1, drag_model.cpp). cgd-fit (fit/model_file.cpp) fills the struct; load_drag_model
 // (core/filtered_drag.cpp: cgd-coarse, cgd-export, cgd-fit --parcel-fit) consumes it.
 #include <cmath>
 #include <cstdint>
@@ -20,11 +20,6 @@ struct Scene;
 
 namespace cgd::schema {
 
-/// The root attribute that holds the model's microscopic base law (PhysicalSystem::micro_drag). The
-/// filtered file spells the same idea `micro_drag` (core/schema/filtered.hpp); both names stay for the
-/// files written.
-inline constexpr const char* kModelMicroLawAttribute = "base_drag";
-
 /// The master curves' form (attribute `curves`): B-splines of h and log a, or the piecewise-linear table of
 /// H_grid of one grid (cgd-fit --grid-table). Absent in a file: Splines.
 enum class ModelCurves { Splines, Table };
@@ -39,7 +34,8 @@ struct SplineRecord {
 
 struct DragModelFile {
   // root attributes
-  PhysicalSystem system;  // the law under kModelMicroLawAttribute
+  std::int64_t version = 0;  // cgd_format_version as read (write: kDragModel.version)
+  PhysicalSystem system;     // the law under names::kMicroLawAttribute (version 1: base_drag)
   std::string model_form;
   std::string u_t_convention = kUtConvention;
   double width_exponent = 1;            // absent: 1 (files written before it)

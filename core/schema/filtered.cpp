@@ -7,7 +7,7 @@
 
 #include "core/error.hpp"
 #include "core/h5.hpp"
-#include "core/output.hpp"
+#include "core/schema/common.hpp"
 #include "core/schema/calibration.hpp"
 #include "core/schema/check.hpp"
 
@@ -136,7 +136,7 @@ void write_root(h5::File& f, const Scene* scene, const Filtered& s) {
     f.set_attr("/", "code_version", std::string(CGD_VERSION));
     f.set_attr("/", kScene, s.scene_toml);
   }
-  write_physical_system(f, s.system, kFilteredMicroLawAttribute);
+  write_physical_system(f, s.system, names::kMicroLawAttribute);
   f.set_attr("/", kParcelSize, s.parcel_size);
   f.set_attr("/", kCellSize, s.cell_size_m);
   f.set_attr("/", kPressureTerms, std::int64_t{s.pressure_terms.value_or(true) ? 1 : 0});
@@ -176,7 +176,7 @@ void write_grid_attributes(h5::File& f, const std::string& g, const Grid& c) {
   f.set_attr(g, "cell_size_m", c.cell_size_m);
   f.set_attr(g, "cell_size_over_dp", c.cell_size_over_dp);
   f.set_attr(g, "kernel", std::string("tsc"));
-  f.set_attr(g, "operator", std::string(names_of(CalibrationOperator::TscGrid).filtered_file));
+  f.set_attr(g, "operator", std::string(to_string(CalibrationOperator::Grid)));
   f.set_attr(g, "void_fraction_floor", c.void_fraction_floor);
   for (const auto& n : kEquivalentNumbers) f.set_attr(g, n.name, c.*n.member);
   f.set_attr(g, "equivalent_width_bins", c.equivalent_width_bins);
@@ -247,19 +247,29 @@ void require_kind(const h5::File& f, const std::string& g, FilterKind expected) 
                      to_string(expected) + "\" (the group's path)");
 }
 
-void require_grid_operator(const h5::File& f, const std::string& object) {
+/// The spelling that changed with version 2 (docs/schema-filtered.md "Versions"): version 2 spells the grids'
+/// `operator` "grid", as the groups' `kind`, cgd-fit --operator and the drag model file do; version 1 (the files
+/// written before) spelled it "tsc-deposit-interpolate". The one upgrade path: the reader of a version-1 file
+/// takes that spelling, and only a version-1 file.
+constexpr const char* kVersion1GridOperator = "tsc-deposit-interpolate";
+const char* upgrade_version1(std::int64_t version) {
+  return version == 1 ? kVersion1GridOperator : to_string(CalibrationOperator::Grid);
+}
+
+void require_grid_operator(const h5::File& f, const std::string& object, std::int64_t version) {
   if (!f.has_attr(object, "operator")) return;
   const std::string text = f.attr_string(object, "operator");
-  if (parse_calibration_operator(text, &CalibrationOperatorNames::filtered_file) != CalibrationOperator::TscGrid)
+  const char* expected = upgrade_version1(version);
+  if (text != expected)
     throw InputError(f.path() + ": attribute 'operator' of '" + object + "' is \"" + text + "\", expected \"" +
-                     names_of(CalibrationOperator::TscGrid).filtered_file + "\"");
+                     expected + "\" (cgd_format_version " + std::to_string(version) + ")");
 }
 
 void read_root(const h5::File& f, Filtered& s) {
   if (!f.has_attr("/", kScene))
     throw InputError(f.path() + ": filtered file lacks the root attribute 'scene' (the first run's scene text)");
   s.scene_toml = f.attr_string("/", kScene);
-  s.system = read_physical_system(f, kFilteredMicroLawAttribute, "filtered file");
+  s.system = read_physical_system(f, names::kMicroLawAttribute, "filtered file");
   if (!(s.system.l_char_m > 0))
     throw InputError(f.path() + ": attribute 'l_char_m' of '/' is " + number(s.system.l_char_m) + ", expected > 0");
   s.parcel_size = optional_finite(f, "/", kParcelSize);
@@ -307,7 +317,7 @@ void read_runs_and_snapshots(const h5::File& f, Filtered& s) {
                        std::to_string(nr) + ")");
 }
 
-Grid read_grid_attributes(const h5::File& f, const std::string& g) {
+Grid read_grid_attributes(const h5::File& f, const std::string& g, std::int64_t version) {
   Grid c;
   for (const char* key : {"cells_across", "cell_size_over_dp"})
     if (!f.has_attr(g, key)) throw InputError(f.path() + ": grid group '" + g + "' lacks the attribute '" + key + "'");
@@ -326,11 +336,11 @@ Grid read_grid_attributes(const h5::File& f, const std::string& g) {
   if (f.has_attr(g, "equivalent_width_at_bound"))
     c.equivalent_width_at_bound = f.attr_int(g, "equivalent_width_at_bound") != 0;
   if (f.has_attr(g, "equivalent_width_method")) c.equivalent_width_method = f.attr_string(g, "equivalent_width_method");
-  require_grid_operator(f, g);
+  require_grid_operator(f, g, version);
   return c;
 }
 
-Group read_group(const h5::File& f, const std::string& g, FilterKind kind, bool per_snapshot, std::uint64_t ns,
+Group read_group(const h5::File& f, const std::string& g, FilterKind kind, std::int64_t version, bool per_snapshot, std::uint64_t ns,
                  std::uint64_t nb) {
   const std::string& path = f.path();
   Group w;
@@ -341,7 +351,7 @@ Group read_group(const h5::File& f, const std::string& g, FilterKind kind, bool 
   if (!(w.F > 0)) throw InputError(path + ": attribute 'F' of '" + g + "' is " + number(w.F) + ", expected > 0");
   for (const auto& n : kGroupNumbers) w.*n.member = optional_finite(f, g, n.name);
   if (f.has_attr(g, "out_of_range")) w.out_of_range = f.attr_int(g, "out_of_range");
-  if (kind == FilterKind::Grid) w.grid = read_grid_attributes(f, g);
+  if (kind == FilterKind::Grid) w.grid = read_grid_attributes(f, g, version);
 
   const std::string per_bin = "n_bins = len(/bins/phi_edges) - 1 = " + std::to_string(nb);
   w.count = read_ints(f, g + "/count", {nb}, per_bin);
@@ -431,7 +441,7 @@ void write_filtered(const std::string& path, const Scene* scene, const Filtered&
     if (!across.empty()) {
       f.create_group(kGrids);
       f.set_attr(kGrids, "cells_across", across);
-      f.set_attr(kGrids, "operator", std::string(names_of(CalibrationOperator::TscGrid).filtered_file));
+      f.set_attr(kGrids, "operator", std::string(to_string(CalibrationOperator::Grid)));
       f.set_attr(kGrids, "definition", std::string(kGridsDefinition));
     }
     for (std::size_t i = 0; i < s.groups.size(); ++i)
@@ -441,8 +451,8 @@ void write_filtered(const std::string& path, const Scene* scene, const Filtered&
 
 Filtered read_filtered(const std::string& path) {
   h5::File f = h5::File::open_read(path, MPI_COMM_SELF);
-  check_format(f, kFiltered);
   Filtered s;
+  s.version = check_format(f, kFiltered);
   read_root(f, s);
   read_runs_and_snapshots(f, s);
   const std::uint64_t ns = s.snapshot_run_index.size(), nb = s.bins();
@@ -452,7 +462,7 @@ Filtered read_filtered(const std::string& path) {
     groups.emplace_back(kWidthPrefix + std::to_string(k), FilterKind::Box);
   if (f.exists(kWholeBox)) groups.emplace_back(kWholeBox, FilterKind::WholeBox);
   if (f.exists(kGrids) && f.has_attr(kGrids, "cells_across")) {
-    require_grid_operator(f, kGrids);
+    require_grid_operator(f, kGrids, s.version);
     for (std::int64_t n : f.attr_ints(kGrids, "cells_across")) {
       const std::string g = std::string(kGrids) + "/" + std::to_string(n);
       if (!f.exists(g))
@@ -463,7 +473,7 @@ Filtered read_filtered(const std::string& path) {
   }
   // the per-snapshot sums are in every group or in none (the first decides)
   const bool per_snapshot = !groups.empty() && f.exists(groups.front().first + "/per_snapshot/numerator");
-  for (const auto& [g, kind] : groups) s.groups.push_back(read_group(f, g, kind, per_snapshot, ns, nb));
+  for (const auto& [g, kind] : groups) s.groups.push_back(read_group(f, g, kind, s.version, per_snapshot, ns, nb));
   for (const FilteredGroup& g : s.groups)
     if (g.kind == FilterKind::Grid && g.grid && g.grid->cells_across <= 0)
       throw InputError(path + ": attribute 'cells_across' of a grid group is " + std::to_string(g.grid->cells_across) +

@@ -17,10 +17,6 @@ struct Scene;
 
 namespace cgd::schema {
 
-/// The root attribute that holds the runs' microscopic law (PhysicalSystem::micro_drag). The drag model
-/// file spells the same idea `base_drag` (core/schema/drag_model.hpp); both names stay for the files written.
-inline constexpr const char* kFilteredMicroLawAttribute = "micro_drag";
-
 /// What a width group filters with: a box of width_m (`/width_<k>`), the whole box (`/whole_box`), or a
 /// coarse grid's TSC deposit and interpolation (`/grids/<N>`). Stored as the group's attribute `kind`.
 enum class FilterKind { Box, WholeBox, Grid };
@@ -71,7 +67,8 @@ struct FilteredGroup {
 struct Filtered {
   // root attributes
   std::string scene_toml;  // `scene`
-  PhysicalSystem system;   // the runs' system; the law under kFilteredMicroLawAttribute
+  std::int64_t version = 0;  // cgd_format_version as read (write: kFiltered.version)
+  PhysicalSystem system;     // the runs' system; the law under names::kMicroLawAttribute
   double parcel_size = NAN;
   std::vector<double> cell_size_m;  // 3
   std::optional<bool> pressure_terms;
@@ -107,7 +104,8 @@ std::vector<std::string> group_paths(const Filtered& file);
 /// format, the code version and `scene_toml` are written at the root.
 void write_filtered(const std::string& path, const Scene* scene, const Filtered& file);
 
-/// Reads and validates `path` (docs/schema-filtered.md "What the reader checks"). InputError naming the file
+/// Reads and validates `path` (docs/schema-filtered.md "What the reader checks"); a file of version 1 has its
+/// one old spelling upgraded (the grids' operator, filtered.cpp upgrade_version1). InputError naming the file
 /// and the attribute or dataset, what was found and what was expected.
 Filtered read_filtered(const std::string& path);
 

@@ -52,7 +52,7 @@ print(f"ok   whole box reproduces the series' slip at {len(whole)} snapshots")
 # resolved coupling exactly (same deposit, identity restriction, the coupler's gradient and
 # interpolation): H_grid = 0 to round-off in every bin, per snapshot too (1e-11: see test_tsc_grid.cpp).
 own = f["grids/6"]
-assert own.attrs["kind"] == "grid" and own.attrs["operator"] == "tsc-deposit-interpolate"
+assert own.attrs["kind"] == "grid" and own.attrs["operator"] == "grid"
 assert list(own.attrs["cells"]) == [6, 24, 6] and abs(own.attrs["width_over_cell"] - 1) < 1e-12
 m = own["count"][:] > 0
 assert m.sum() >= 3 and np.all(abs(own["H"][m]) < 1e-11), own["H"][m]
@@ -81,7 +81,7 @@ if [ -x "$fit" ]; then
   "$py" - "$tmp/a.h5" "$tmp/perfect.h5" <<'PY' || fail "grid-table model"
 import sys, h5py, numpy as np
 a, m = h5py.File(sys.argv[1]), h5py.File(sys.argv[2])
-assert m.attrs["curves"] == "table" and m.attrs["operator"] == "tsc-grid" and m.attrs["table_cells_across"] == 4
+assert m.attrs["curves"] == "table" and m.attrs["operator"] == "grid" and m.attrs["table_cells_across"] == 4
 grid = a["grids/4"]
 ok = grid["count"][:] >= 100
 assert np.allclose(m["table/phi"][:], grid["phi_mean"][ok], rtol=0, atol=1e-15)

@@ -13,7 +13,8 @@
 
 #include "core/error.hpp"
 #include "core/h5.hpp"
-#include "core/output.hpp"
+#include "core/schema/series.hpp"
+#include "core/schema/snapshot.hpp"
 #include "core/scene.hpp"
 
 namespace fs = std::filesystem;

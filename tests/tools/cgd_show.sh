@@ -40,7 +40,7 @@ checks=("run directory|run|run: complete (DONE)"
         "checkpoint|run/checkpoint.h5|format        checkpoint"
         "series|run/series.h5|format        series"
         "filtered|filtered.h5|H = 1 - beta_bar/beta_micro"
-        "drag_model|model.h5|base law beetstra, H(F, phi)"
+        "drag_model|model.h5|micro law beetstra, H(F, phi)"
         "drag_model (table)|perfect.h5|a table model (the perfect closure"
         "coarse_summary|summary.h5|coarse run summary"
         "study|study.h5|over the solids fractions")

@@ -79,7 +79,7 @@ TEST(FitOperator, GridFitsTheGridsHAndBoxTheBoxWidths) {
   SyntheticSpec s;
   s.noise = 0.01;
   const FilteredFile f = with_grids(s, 0.5);
-  const FitResult g = fit({f}, CalibrationOperator::TscGrid), b = fit({f}, CalibrationOperator::Box);
+  const FitResult g = fit({f}, CalibrationOperator::Grid), b = fit({f}, CalibrationOperator::Box);
   const cgd::SplineCurves cg{&g.model}, cb{&b.model};
   for (double phi = 0.1; phi <= 0.4 + 1e-9; phi += 0.05) {
     EXPECT_NEAR(cg.h(phi), truth_h(phi), 0.01) << phi;
@@ -87,17 +87,16 @@ TEST(FitOperator, GridFitsTheGridsHAndBoxTheBoxWidths) {
   }
   FilteredFile none = make_synthetic(s);
   try {
-    cgd::fit::select_operator({none}, CalibrationOperator::TscGrid);
+    cgd::fit::select_operator({none}, CalibrationOperator::Grid);
     ADD_FAILURE() << "no InputError";
   } catch (const cgd::InputError& e) {
     EXPECT_NE(std::string(e.what()).find("--grids"), std::string::npos) << e.what();
   }
-  EXPECT_FALSE(cgd::parse_calibration_operator("tent", &cgd::CalibrationOperatorNames::option));
-  EXPECT_EQ(cgd::parse_calibration_operator("grid", &cgd::CalibrationOperatorNames::option),
-            CalibrationOperator::TscGrid);
+  EXPECT_FALSE(cgd::parse_calibration_operator("tent"));
+  EXPECT_EQ(cgd::parse_calibration_operator("grid"), CalibrationOperator::Grid);
 }
 
-// The model file records its calibration: operator tsc-grid, kernel tsc, the cell sizes fitted; a run
+// The model file records its calibration: operator grid, kernel tsc, the cell sizes fitted; a run
 // whose Delta lies within them gets no warning, outside it one naming both; a box model always warns
 // (the coarse run applies its grid's operator); a file without the attribute reads as "box".
 TEST(FitOperator, ModelFileSaysWhatItWasCalibratedForAndTheRunWarns) {
@@ -107,12 +106,12 @@ TEST(FitOperator, ModelFileSaysWhatItWasCalibratedForAndTheRunWarns) {
   const FilteredFile f = with_grids(s, 0.5);
   const cgd::Scene scene = cgd::load_scene_from_string(demo_scene(), "closure_test.toml");
   FitOptions o;
-  o.calibration_operator = CalibrationOperator::TscGrid;
-  const FitResult g = fit({f}, CalibrationOperator::TscGrid, o);
+  o.calibration_operator = CalibrationOperator::Grid;
+  const FitResult g = fit({f}, CalibrationOperator::Grid, o);
   const std::string grid_path = (dir / "grid.h5").string(), box_path = (dir / "box.h5").string();
-  cgd::fit::write_model_file(grid_path, g, cgd::fit::select_operator({f}, CalibrationOperator::TscGrid), o, scene);
+  cgd::fit::write_model_file(grid_path, g, cgd::fit::select_operator({f}, CalibrationOperator::Grid), o, scene);
   const cgd::DragModel m = cgd::load_drag_model(grid_path);
-  EXPECT_EQ(m.calibration_operator, CalibrationOperator::TscGrid);
+  EXPECT_EQ(m.calibration_operator, CalibrationOperator::Grid);
   ASSERT_EQ(m.calibrated_delta_m.size(), s.F.size());
   const double lo = f.physics.l_char_m / s.F.front(), hi = f.physics.l_char_m / s.F.back();  // F descending
   EXPECT_NEAR(m.calibrated_delta_m.front(), lo, 1e-12 * lo);
@@ -124,7 +123,7 @@ TEST(FitOperator, ModelFileSaysWhatItWasCalibratedForAndTheRunWarns) {
   {
     cgd::h5::File h = cgd::h5::File::open_read(grid_path, MPI_COMM_SELF);
     EXPECT_EQ(h.attr_string("/", "kernel"), "tsc");
-    EXPECT_EQ(h.attr_string("/", "operator"), "tsc-grid");
+    EXPECT_EQ(h.attr_string("/", "operator"), "grid");
   }
   o.calibration_operator = CalibrationOperator::Box;
   const FitResult b = fit({f}, CalibrationOperator::Box, o);
@@ -157,7 +156,7 @@ TEST(GridTable, ModelReproducesTheTableAtItsPointsAndAppliesIt) {
   const cgd::DragModel m = cgd::load_drag_model(path);
   EXPECT_TRUE(m.table);
   EXPECT_EQ(m.table_cells_across, grid.cells_across);
-  EXPECT_EQ(m.calibration_operator, CalibrationOperator::TscGrid);
+  EXPECT_EQ(m.calibration_operator, CalibrationOperator::Grid);
   const cgd::SplineCurves c{&m};
   int points = 0;
   for (std::size_t b = 0; b < f.bins(); ++b) {
@@ -290,7 +289,7 @@ TEST(Fit, LowPhiOnTheDemoGridsKeepsTheCorrection) {
   const FilteredFile f = demo_grids_file();
   FitOptions o;
   o.min_width_over_cell = 1.01;
-  const FitResult r = fit({f}, CalibrationOperator::TscGrid, o);
+  const FitResult r = fit({f}, CalibrationOperator::Grid, o);
   const cgd::SplineCurves c{&r.model};
   double hi = 0;
   for (const auto& b : r.bins)
@@ -314,7 +313,7 @@ TEST(Fit, LowPhiModelReproducesTheBinsH) {
     FitOptions o;
     o.min_width_over_cell = 1.01;
     o.fit_width_exponent = true;
-    const FitResult r = fit({f}, CalibrationOperator::TscGrid, o);
+    const FitResult r = fit({f}, CalibrationOperator::Grid, o);
     const cgd::SplineCurves c{&r.model};
     const double n = r.model.width_exponent;
     for (std::size_t b : {std::size_t{1}, std::size_t{2}}) {  // phi 0.017 and 0.024: the first fitted bins

@@ -9,7 +9,8 @@
 #include "coarse/coarse.hpp"
 #include "core/error.hpp"
 #include "core/filtered_drag.hpp"
-#include "core/output.hpp"
+#include "core/schema/series.hpp"
+#include "core/schema/snapshot.hpp"
 #include "core/scene.hpp"
 #include "core/time_average.hpp"
 

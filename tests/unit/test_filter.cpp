@@ -8,7 +8,7 @@
 #include <random>
 
 #include "core/drag.hpp"
-#include "core/snapshot.hpp"
+#include "core/schema/snapshot.hpp"
 #include "filter/box_filter.hpp"
 #include "filter/filter.hpp"
 #include "filter/statistics.hpp"
@@ -183,7 +183,7 @@ TEST(BoxFilter, WholeBoxWidthEqualsTheDomainAverage) {
 // ---- the per-particle filter and the bins -----------------------------------------------------------
 
 struct SyntheticRun {
-  Snapshot snap;
+  schema::Snapshot snap;
   FilterPlan plan;
   FilterOptions options;
 };
@@ -194,7 +194,7 @@ SyntheticRun per_cell_run(bool uniform) {
   SyntheticRun r;
   const double d = 75e-6, h = 2.5e-4;
   PeriodicGrid g = make_grid(6, 8, 6, h);
-  Snapshot& s = r.snap;
+  schema::Snapshot& s = r.snap;
   s.has_fluid = true;
   s.grid = g;
   s.physics = cgd::testing::air_beetstra_physics(d);
@@ -329,7 +329,7 @@ TEST(Filter, ClusterColumnGivesHThatGrowsWithTheWidthAndTheFullPeriodValue) {
   // A box as wide as the period sees the domain average: H there is computed here from the sums.
   const int n = 16;
   const double d = 75e-6, h = 2.5e-4;
-  Snapshot s;
+  schema::Snapshot s;
   s.has_fluid = true;
   s.grid.cells = {n, 4, 4};
   s.grid.spacing_m = {h, h, h};

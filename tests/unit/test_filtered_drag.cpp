@@ -39,7 +39,8 @@
 #include "core/error.hpp"
 #include "core/filtered_drag.hpp"
 #include "core/h5.hpp"
-#include "core/output.hpp"
+#include "core/schema/series.hpp"
+#include "core/schema/snapshot.hpp"
 #include "core/scene.hpp"
 #include "fit/fitter.hpp"
 #include "sim/run.hpp"
@@ -498,7 +499,7 @@ TEST(ShippedModels, HalfBoxLoadsCarriesProvenanceAndReproducesItsGridH) {
   const std::string path = source_dir() + "/data/models/half_box.h5";
   const cgd::DragModel m = cgd::load_drag_model(path);
   EXPECT_NO_THROW(cgd::check_model_matches_scene(m, scene_with({})));
-  EXPECT_EQ(m.calibration_operator, cgd::CalibrationOperator::TscGrid);
+  EXPECT_EQ(m.calibration_operator, cgd::CalibrationOperator::Grid);
   EXPECT_EQ(m.c_corr_a, 1.0);  // c_corr = 1: validated without a parcel correction
   {
     const cgd::h5::File f = cgd::h5::File::open_read(path, MPI_COMM_SELF);

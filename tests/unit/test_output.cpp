@@ -17,12 +17,14 @@
 #include <string>
 #include <vector>
 
-#include "core/checkpoint.hpp"
+#include "core/schema/checkpoint.hpp"
 #include "core/error.hpp"
 #include "core/h5.hpp"
-#include "core/output.hpp"
+#include "core/schema/series.hpp"
+#include "core/schema/snapshot.hpp"
+#include "core/xdmf.hpp"
 #include "core/scene.hpp"
-#include "core/series.hpp"
+#include "core/schema/series.hpp"
 #include "temp_dir.hpp"
 
 namespace fs = std::filesystem;
@@ -358,7 +360,7 @@ with h5py.File(sys.argv[2], 'r') as f:
   EXPECT_EQ(std::system(cmd.c_str()), 0) << cmd;
 }
 
-// core/series.hpp: a run's columns are named, in the documented order, with the optional ones only
+// core/schema/series.hpp: a run's columns are named, in the documented order, with the optional ones only
 // where the layout calls for them, and a row lands under its names.
 TEST_F(OutputTest, RunSeriesColumnsFollowTheLayoutAndRowsLandUnderTheirNames) {
   cgd::schema::RunSeriesLayout dry{false, false, {"neighbor", "output"}};
@@ -393,7 +395,7 @@ TEST_F(OutputTest, RunSeriesColumnsFollowTheLayoutAndRowsLandUnderTheirNames) {
   EXPECT_EQ(c.column("floored_cells")[0], 4.0);
 }
 
-// core/checkpoint.hpp: what is written is read back exactly -- the run state, the particles with their
+// core/schema/checkpoint.hpp: what is written is read back exactly -- the run state, the particles with their
 // contact records, and the fluid fields by name -- at one rank.
 TEST_F(OutputTest, CheckpointRoundTripKeepsRunStateParticlesContactsAndFluid) {
   const cgd::Scene scene = test_scene();

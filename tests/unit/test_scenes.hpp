@@ -8,14 +8,14 @@
 #include <stdexcept>
 #include <string>
 
-#include "core/snapshot.hpp"
+#include "core/schema/snapshot.hpp"
 
 namespace cgd::testing {
 
 /// The /params of a snapshot of a resolved two-way Beetstra run in air (the scene's numbers: 1500 kg/m^3
 /// particles of diameter d, u_t and L_char of 75 um particles), for snapshots built by hand.
-inline RunPhysics air_beetstra_physics(double d) {
-  RunPhysics p;
+inline schema::RunPhysics air_beetstra_physics(double d) {
+  schema::RunPhysics p;
   p.diameter_m = d;
   p.particle_density_kg_m3 = 1500;
   p.fluid_density_kg_m3 = 1.3;

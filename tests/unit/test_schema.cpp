@@ -8,6 +8,7 @@
 #include <gtest/gtest.h>
 #include <mpi.h>
 
+#include <array>
 #include <cmath>
 #include <cstring>
 #include <filesystem>
@@ -21,6 +22,7 @@
 #include "core/scene.hpp"
 #include "core/schema/calibration.hpp"
 #include "core/schema/check.hpp"
+#include "core/schema/common.hpp"
 #include "core/schema/drag_model.hpp"
 #include "core/schema/filtered.hpp"
 #include "temp_dir.hpp"
@@ -50,12 +52,18 @@ std::string refusal(const std::string& path, const cgd::schema::Format& format) 
   return "";
 }
 
-TEST(SchemaFormat, EveryFormatButTheCheckpointIsUnsealedAndAtVersionOne) {
+TEST(SchemaFormat, EveryFormatButTheCheckpointIsUnsealedAndAtItsVersion) {
   for (const cgd::schema::Format* f : {&cgd::schema::kSnapshot, &cgd::schema::kSeries, &cgd::schema::kFiltered,
                                        &cgd::schema::kDragModel, &cgd::schema::kCoarseSummary}) {
     EXPECT_FALSE(f->sealed) << f->name;
-    EXPECT_EQ(f->version, 1) << f->name;
+    EXPECT_EQ(f->oldest_version, 1) << f->name;
   }
+  EXPECT_EQ(cgd::schema::kSnapshot.version, 1);
+  EXPECT_EQ(cgd::schema::kSeries.version, 1);
+  EXPECT_EQ(cgd::schema::kCoarseSummary.version, 1);
+  // 2: one spelling per idea (micro_drag, operator "grid"); version 1 read through one upgrade path
+  EXPECT_EQ(cgd::schema::kFiltered.version, 2);
+  EXPECT_EQ(cgd::schema::kDragModel.version, 2);
   EXPECT_TRUE(cgd::schema::kCheckpoint.sealed);
   EXPECT_EQ(cgd::schema::kCheckpoint.version, 3);  // 3: the neighbour-list anchors (issue 25)
   EXPECT_EQ(cgd::schema::kCheckpoint.oldest_version, 1);
@@ -65,7 +73,7 @@ TEST(SchemaFormat, RefusesAnotherFormatAndAVersionItDoesNotReadNamingThem) {
   cgd::testing::TempDir dir("cgd_test_schema");
   EXPECT_EQ(refusal(stamped(dir, "ok.h5", "filtered", 1), cgd::schema::kFiltered), "");
   const std::string newer = refusal(stamped(dir, "newer.h5", "filtered", 7), cgd::schema::kFiltered);
-  EXPECT_NE(newer.find("cgd_format_version = 7: this build reads filtered files of version 1"), std::string::npos)
+  EXPECT_NE(newer.find("cgd_format_version = 7: this build reads filtered files of versions 1 to 2"), std::string::npos)
       << newer;
   EXPECT_NE(newer.find("newer cgd"), std::string::npos) << newer;
   const std::string older = refusal(stamped(dir, "older.h5", "checkpoint", 0), cgd::schema::kCheckpoint);
@@ -392,7 +400,9 @@ TEST(FilteredSchema, RoundTripKeepsEveryField) {
   File f = File::open_read(path, MPI_COMM_SELF);
   EXPECT_EQ(f.attr_string("/whole_box", "kind"), "whole_box");
   EXPECT_EQ(f.attr_string("/grids/4", "kind"), "grid");
-  EXPECT_EQ(f.attr_string("/grids", "operator"), "tsc-deposit-interpolate");
+  EXPECT_EQ(f.attr_string("/grids", "operator"), "grid");
+  EXPECT_EQ(f.attr_string("/grids/4", "operator"), "grid");
+  EXPECT_EQ(f.attr_int("/", "cgd_format_version"), 2);
   EXPECT_EQ(f.attr_string("/", "micro_drag"), "wen-yu");
 }
 
@@ -419,7 +429,10 @@ TEST(FilteredSchema, RefusesDamagedFilesNamingTheFileAndTheKey) {
       {"no_H_low", removed_dataset("/grids/4/H_low"), "/grids/4/H_low", "no dataset"},
       {"block_rows", replaced_dataset("/snapshots/block", {kSnapshots + 1}), "/snapshots/block", "shape (4,)"},
       {"counts_disagree", value_at("/runs/mean_solids_fraction", 0, 0.2), "", ""},  // a value change: still valid
-      {"grid_operator", attribute_as_text("/grids", "operator", "tent"), "operator", "tsc-deposit-interpolate"},
+      {"grid_operator", attribute_as_text("/grids", "operator", "tent"), "operator", "expected \"grid\""},
+      // version 1's spelling in a version-2 file: refused (the upgrade path is for version-1 files only)
+      {"old_operator", attribute_as_text("/grids/4", "operator", "tsc-deposit-interpolate"), "operator",
+       "expected \"grid\" (cgd_format_version 2)"},
       {"kind", attribute_as_text("/width_1", "kind", "grid"), "kind", "\"box\""},
       {"no_grid_size", remove_attribute("/grids/4", "cell_size_over_dp"), "cell_size_over_dp", "/grids/4"},
   };
@@ -450,7 +463,7 @@ DragModelFile model_record() {
   m.system = test_system(cgd::DragLaw::Stokes);
   m.model_form = "the form";
   m.width_exponent = 1.5, m.width_exponent_fitted = true, m.width_exponent_low = 1.2, m.width_exponent_high = 1.9;
-  m.calibration_operator = cgd::CalibrationOperator::TscGrid;
+  m.calibration_operator = cgd::CalibrationOperator::Grid;
   m.curves = cgd::schema::ModelCurves::Splines;
   m.calibrated_delta_m = {3e-4, 6e-4}, m.calibrated_delta_over_dp = {4, 8}, m.calibrated_cells_across = {6, 3};
   m.phi_crit = 0.016, m.phi_max = 0.516, m.h_max = 0.99, m.log_a_min = -0.5, m.log_a_max = 5;
@@ -511,7 +524,7 @@ TEST(DragModelSchema, RoundTripKeepsEveryField) {
   EXPECT_TRUE(r.width_exponent_fitted);
   EXPECT_EQ(r.width_exponent_low, 1.2);
   EXPECT_EQ(r.width_exponent_high, 1.9);
-  EXPECT_EQ(r.calibration_operator, cgd::CalibrationOperator::TscGrid);
+  EXPECT_EQ(r.calibration_operator, cgd::CalibrationOperator::Grid);
   EXPECT_EQ(r.curves, cgd::schema::ModelCurves::Splines);
   EXPECT_TRUE(same(r.calibrated_delta_m, m.calibrated_delta_m));
   EXPECT_TRUE(same(r.calibrated_delta_over_dp, m.calibrated_delta_over_dp));
@@ -582,9 +595,11 @@ TEST(DragModelSchema, RoundTripKeepsEveryField) {
   EXPECT_FALSE(r.code_version.empty());
   // the closed choices as stored: the model file's spellings
   File f = File::open_read(path, MPI_COMM_SELF);
-  EXPECT_EQ(f.attr_string("/", "operator"), "tsc-grid");
+  EXPECT_EQ(f.attr_string("/", "operator"), "grid");
   EXPECT_EQ(f.attr_string("/", "curves"), "splines");
-  EXPECT_EQ(f.attr_string("/", "base_drag"), "stokes");
+  EXPECT_EQ(f.attr_string("/", "micro_drag"), "stokes");
+  EXPECT_FALSE(f.has_attr("/", "base_drag"));
+  EXPECT_EQ(f.attr_int("/", "cgd_format_version"), 2);
 }
 
 TEST(DragModelSchema, TableModelRoundTripsAndIsOrderTwo) {
@@ -638,7 +653,7 @@ TEST(DragModelSchema, RefusesDamagedFilesNamingTheFileAndTheKey) {
   cgd::schema::write_drag_model(good, schema_scene(), model_record());
   const std::vector<Case> cases = {
       {"no_phi_crit", remove_attribute("/", "phi_crit"), "phi_crit", "lacks"},
-      {"no_law", remove_attribute("/", "base_drag"), "base_drag", ""},
+      {"no_law", remove_attribute("/", "micro_drag"), "micro_drag", ""},
       {"h_max_text", attribute_as_text("/", "h_max", "0.99"), "h_max", "expected a number"},
       {"phi_crit_nan", attribute_number("/", "phi_crit", NAN), "phi_crit", "finite"},
       {"phi_crit_one", attribute_number("/", "phi_crit", 1.0), "phi_crit", "(0, 1)"},
@@ -655,7 +670,10 @@ TEST(DragModelSchema, RefusesDamagedFilesNamingTheFileAndTheKey) {
       {"data_shape", replaced_dataset("/data/H", {3, 2}), "/data/H", "shape (3, 2)"},
       {"no_c_corr_k", remove_attribute("/c_corr", "k"), "'k'", ""},
       {"no_h", removed_dataset("/h/coefficients"), "/h/coefficients", "no dataset"},
-      {"operator", attribute_as_text("/", "operator", "grid"), "operator", "\"box\" or \"tsc-grid\""},
+      {"operator", attribute_as_text("/", "operator", "tent"), "operator", "\"box\" or \"grid\""},
+      // version 1's spelling in a version-2 file: refused (the upgrade path is for version-1 files only)
+      {"old_operator", attribute_as_text("/", "operator", "tsc-grid"), "operator",
+       "\"box\" or \"grid\" (cgd_format_version 2)"},
       {"curves", attribute_as_text("/", "curves", "lines"), "curves", "\"splines\" or \"table\""},
       {"u_t", attribute_as_text("/", "u_t_convention", "stokes"), "u_t_convention", "schiller-naumann"},
       {"order", attribute_number("/h", "order", 4.0), "order", "integer"},
@@ -687,12 +705,15 @@ TEST(DragModelSchema, CCorrCopyReplacesOnlyTheCorrection) {
   EXPECT_EQ(after.created, before.created);
 }
 
-// The shipped model of data/models/ reads through the schema: the layout of version 1 is kept.
+// The shipped model of data/models/ reads through the schema: a version-1 file (its bytes, and so the
+// checksum runs and exports recorded, unchanged), read through the upgrade path of version 1 (base_drag,
+// "tsc-grid").
 TEST(DragModelSchema, TheShippedModelStillReads) {
   const char* s = std::getenv("CGD_SOURCE_DIR");
   const std::string path = std::string(s ? s : CGD_SOURCE_DIR_DEFAULT) + "/data/models/half_box.h5";
   const DragModelFile m = cgd::schema::read_drag_model(path);
-  EXPECT_EQ(m.calibration_operator, cgd::CalibrationOperator::TscGrid);
+  EXPECT_EQ(m.version, 1);
+  EXPECT_EQ(m.calibration_operator, cgd::CalibrationOperator::Grid);
   EXPECT_EQ(m.curves, cgd::schema::ModelCurves::Splines);
   EXPECT_EQ(m.system.micro_drag, cgd::DragLaw::Beetstra);
   EXPECT_EQ(m.calibrated_cells_across, (std::vector<std::int64_t>{3, 4, 5, 6, 8, 12}));
@@ -701,22 +722,80 @@ TEST(DragModelSchema, TheShippedModelStillReads) {
   EXPECT_FALSE(m.provenance.empty());
 }
 
-// One enum per closed choice, its spellings converted in one place, both ways.
+// One enum per closed choice, one spelling each, converted in one place, both ways.
 TEST(SchemaChoices, EverySpellingConvertsBackToItsEnum) {
-  for (const cgd::CalibrationOperatorNames& n : cgd::kCalibrationOperators)
-    for (auto place : {&cgd::CalibrationOperatorNames::option, &cgd::CalibrationOperatorNames::model_file,
-                       &cgd::CalibrationOperatorNames::filtered_file}) {
-      EXPECT_EQ(cgd::parse_calibration_operator(n.*place, place), n.op) << n.*place;
-      EXPECT_STREQ(cgd::names_of(n.op).*place, n.*place);
-    }
-  EXPECT_FALSE(cgd::parse_calibration_operator("tsc-grid", &cgd::CalibrationOperatorNames::option));
-  EXPECT_FALSE(cgd::parse_calibration_operator("grid", &cgd::CalibrationOperatorNames::model_file));
-  EXPECT_EQ(cgd::calibration_operator_choices(&cgd::CalibrationOperatorNames::model_file), "\"box\" or \"tsc-grid\"");
+  for (const auto op : {cgd::CalibrationOperator::Box, cgd::CalibrationOperator::Grid})
+    EXPECT_EQ(cgd::parse_calibration_operator(cgd::to_string(op)), op) << cgd::to_string(op);
+  EXPECT_STREQ(cgd::to_string(cgd::CalibrationOperator::Box), "box");
+  EXPECT_STREQ(cgd::to_string(cgd::CalibrationOperator::Grid), "grid");
+  // the retired spellings are no spelling of today's files or command line
+  for (const char* old : {"tsc-grid", "tsc-deposit-interpolate", "tent"})
+    EXPECT_FALSE(cgd::parse_calibration_operator(old)) << old;
+  EXPECT_EQ(cgd::calibration_operator_choices(), "\"box\" or \"grid\"");
   EXPECT_STREQ(cgd::schema::to_string(FilterKind::Box), "box");
   EXPECT_STREQ(cgd::schema::to_string(FilterKind::WholeBox), "whole_box");
   EXPECT_STREQ(cgd::schema::to_string(FilterKind::Grid), "grid");
   EXPECT_STREQ(cgd::schema::to_string(cgd::schema::ModelCurves::Splines), "splines");
   EXPECT_STREQ(cgd::schema::to_string(cgd::schema::ModelCurves::Table), "table");
-  EXPECT_STREQ(cgd::schema::kFilteredMicroLawAttribute, "micro_drag");
-  EXPECT_STREQ(cgd::schema::kModelMicroLawAttribute, "base_drag");
+  EXPECT_STREQ(cgd::schema::names::kMicroLawAttribute, "micro_drag");
+}
+
+/// The file rewritten as version 1 wrote it: cgd_format_version 1 and, for each (object, new, old) of
+/// `renamed`, the string attribute `new` of `object` stored as `old`; each (object, name, text) of `values`
+/// set to the old text.
+Damage as_version1(const std::vector<std::array<std::string, 3>>& renamed,
+                   const std::vector<std::array<std::string, 3>>& values) {
+  return [=](hid_t f) {
+    EXPECT_GE(H5Adelete_by_name(f, "/", "cgd_format_version", H5P_DEFAULT), 0);
+    const std::int64_t one = 1;
+    const hid_t space = H5Screate(H5S_SCALAR);
+    const hid_t attr = H5Acreate_by_name(f, "/", "cgd_format_version", H5T_STD_I64LE, space, H5P_DEFAULT,
+                                         H5P_DEFAULT, H5P_DEFAULT);
+    EXPECT_GE(H5Awrite(attr, H5T_NATIVE_INT64, &one), 0);
+    H5Aclose(attr), H5Sclose(space);
+    for (const auto& [object, now, old] : renamed)
+      EXPECT_GE(H5Arename_by_name(f, object.c_str(), now.c_str(), old.c_str(), H5P_DEFAULT), 0) << now;
+    for (const auto& [object, name, text] : values) attribute_as_text(object, name, text)(f);
+  };
+}
+
+// The one upgrade path of each format whose spelling changed: a version-1 file (the micro law under
+// base_drag, the grid operator "tsc-grid" / "tsc-deposit-interpolate") reads to the same struct as the
+// version-2 file it was made from; its old spellings are accepted there and only there.
+TEST(SchemaVersions, VersionOneFilesReadThroughTheirUpgradePath) {
+  cgd::testing::TempDir dir("cgd_test_schema");
+  {
+    const std::string good = (dir.path() / "model.h5").string();
+    cgd::schema::write_drag_model(good, schema_scene(), model_record());
+    const DragModelFile now = cgd::schema::read_drag_model(good);
+    ASSERT_EQ(now.calibration_operator, cgd::CalibrationOperator::Grid);
+    const std::string v1 = damaged_copy(good, "model_v1.h5",
+                                        as_version1({{"/", "micro_drag", "base_drag"}}, {{"/", "operator", "tsc-grid"}}));
+    const DragModelFile old = cgd::schema::read_drag_model(v1);
+    EXPECT_EQ(old.version, 1);
+    EXPECT_EQ(old.calibration_operator, now.calibration_operator);
+    EXPECT_EQ(old.system.micro_drag, now.system.micro_drag);
+    EXPECT_TRUE(same(old.h.coefficients, now.h.coefficients));
+    // version 1 never wrote "grid" or micro_drag: such a file is refused, naming the version's spelling
+    expect_refused(v1, {{"v1_new_operator", attribute_as_text("/", "operator", "grid"), "operator",
+                         "\"box\" or \"tsc-grid\" (cgd_format_version 1)"},
+                        {"v1_no_base_drag", remove_attribute("/", "base_drag"), "base_drag", ""}},
+                   [](const std::string& p) { cgd::schema::read_drag_model(p); });
+  }
+  {
+    const std::string good = (dir.path() / "filtered.h5").string();
+    cgd::schema::write_filtered(good, nullptr, filtered_record());
+    const Filtered now = cgd::schema::read_filtered(good);
+    const std::string v1 = damaged_copy(good, "filtered_v1.h5",
+                                        as_version1({}, {{"/grids", "operator", "tsc-deposit-interpolate"},
+                                                         {"/grids/4", "operator", "tsc-deposit-interpolate"}}));
+    const Filtered old = cgd::schema::read_filtered(v1);
+    EXPECT_EQ(old.version, 1);
+    ASSERT_EQ(old.groups.size(), now.groups.size());
+    for (std::size_t i = 0; i < old.groups.size(); ++i) EXPECT_EQ(old.groups[i].kind, now.groups[i].kind);
+    EXPECT_EQ(old.system.micro_drag, now.system.micro_drag);
+    expect_refused(v1, {{"v1_new_operator", attribute_as_text("/grids/4", "operator", "grid"), "operator",
+                         "expected \"tsc-deposit-interpolate\" (cgd_format_version 1)"}},
+                   [](const std::string& p) { cgd::schema::read_filtered(p); });
+  }
 }

@@ -12,7 +12,7 @@
 
 #include "core/drag.hpp"
 #include "core/scene.hpp"
-#include "core/snapshot.hpp"
+#include "core/schema/snapshot.hpp"
 #include "core/tsc_grid.hpp"
 #include "filter/filter.hpp"
 #include "sim/coupling/exchange.hpp"
@@ -174,8 +174,8 @@ TEST(CoarseGrid, IsTheGridACoarseRunBuildsFromCellsAcross) {
 /// eps = 1 - TSC deposit of the particles, a cell-centred u and a pressure field, and per particle
 /// u_i, grad p_i = TSC interpolation of u_c and of the central differences of p, beta_p,i = Beetstra at
 /// (TSC-interpolated phi, |u_i - v_i|). `uniform`: u_c, p and v the same everywhere.
-Snapshot coupled_snapshot(const PeriodicGrid& g, const std::vector<double>& positions, bool uniform, unsigned seed) {
-  Snapshot s;
+schema::Snapshot coupled_snapshot(const PeriodicGrid& g, const std::vector<double>& positions, bool uniform, unsigned seed) {
+  schema::Snapshot s;
   const double d = 75e-6;
   s.has_fluid = true;
   s.grid = g;
@@ -218,7 +218,7 @@ Snapshot coupled_snapshot(const PeriodicGrid& g, const std::vector<double>& posi
 }
 
 /// A plan with one box width (one cell) and the coarse grids given (cells across, spacing = box / cells).
-filter::FilterPlan plan_with_grids(const Snapshot& s, const std::vector<std::array<int, 3>>& grids) {
+filter::FilterPlan plan_with_grids(const schema::Snapshot& s, const std::vector<std::array<int, 3>>& grids) {
   filter::FilterPlan plan;
   filter::RunPlan run;
   run.physics = s.physics;
@@ -252,7 +252,7 @@ TEST(CoarseGridOperator, ResolvedRunsOwnGridGivesHZeroToRoundOff) {
   std::vector<double> x;
   for (int i = 0; i < 6 * 8 * 6 * 6; ++i)
     for (int a = 0; a < 3; ++a) x.push_back(U(rng) * g.edge_m(a));
-  const Snapshot s = coupled_snapshot(g, x, false, 2);
+  const schema::Snapshot s = coupled_snapshot(g, x, false, 2);
   const filter::FilterPlan plan = plan_with_grids(s, {{6, 8, 6}});
   filter::FilterOptions o;
   o.samples = 100000;
@@ -296,7 +296,7 @@ TEST(CoarseGridOperator, UniformFieldsOnAUniformLatticeGiveTheResolvedSlipAndHZe
     for (int j = 0; j < 12; ++j)
       for (int i = 0; i < 8; ++i)
         x.insert(x.end(), {(i + 0.5) * 2.5e-4, (j + 0.5) * 2.5e-4, (k + 0.5) * 2.5e-4});
-  const Snapshot s = coupled_snapshot(g, x, true, 1);
+  const schema::Snapshot s = coupled_snapshot(g, x, true, 1);
   const filter::FilterPlan plan = plan_with_grids(s, {{4, 6, 4}, {8, 12, 8}});
   filter::FilterOptions o;
   o.samples = 100000;

@@ -20,7 +20,9 @@
 #include <vector>
 
 #include "core/h5.hpp"
-#include "core/output.hpp"
+#include "core/schema/series.hpp"
+#include "core/schema/snapshot.hpp"
+#include "core/xdmf.hpp"
 #include "core/scene.hpp"
 #include "temp_dir.hpp"
 

@@ -1,8 +1,9 @@
 #pragma once
-// series.h5 of a run directory (docs/schema-run.md, "Series"): the time-series table (Series, any
-// columns) and the columns a run of cgd-generate / cgd-coarse writes (RunSeriesRow). The one place that
-// knows those column names, their units and their order; readers (the coarse summary, tools/) find a
-// column by its name.
+// The series file (cgd_format "series", series.h5 of a run directory, docs/schema-run.md "Series"): its one
+// home. The time-series table (Series, any columns; one write, one validating read), the names of its root
+// attributes and of the columns a run of cgd-generate / cgd-coarse writes (RunSeriesRow, in the order
+// declare_run_columns gives), each spelled once below. Readers (the coarse summary, tools/) find a column by
+// its name.
 #include <mpi.h>
 
 #include <cstdint>
@@ -10,6 +11,38 @@
 #include <vector>
 
 #include "core/scene.hpp"
+#include "core/schema/common.hpp"
+
+namespace cgd::schema::names {
+
+// series: root attributes (and each column's `unit`, names::kUnit)
+inline constexpr const char* kColumns = "columns";    // the column names, in file order; the first is time
+inline constexpr const char* kRows = "rows";          // the rows of every column
+inline constexpr const char* kWarnings = "warnings";  // the run's warnings (optional)
+
+// series: the columns of a run (datasets /<name>, (rows) or (rows, 3)), in file order
+inline constexpr const char* kColTime = "time";
+inline constexpr const char* kColStep = "step";
+inline constexpr const char* kColSolidsFraction = "solids_fraction";
+inline constexpr const char* kColSlipVelocity = "slip_velocity";
+inline constexpr const char* kColFluidVelocityMean = "fluid_velocity_mean";
+inline constexpr const char* kColParticleVelocityMean = "particle_velocity_mean";
+inline constexpr const char* kColKineticEnergy = "kinetic_energy";
+inline constexpr const char* kColRotationalEnergy = "rotational_energy";
+inline constexpr const char* kColContactEnergy = "contact_energy";
+inline constexpr const char* kColMomentum = "momentum";
+inline constexpr const char* kColContactsPerParticle = "contacts_per_particle";
+inline constexpr const char* kColMaxOverlapRel = "max_overlap_rel";
+inline constexpr const char* kColNeighborRebuilds = "neighbor_rebuilds";
+inline constexpr const char* kColWallSeconds = "wall_seconds";
+inline constexpr const char* kColDtFluid = "dt_fluid";
+inline constexpr const char* kColFluidKineticEnergy = "fluid_kinetic_energy";
+inline constexpr const char* kColContinuityResidualRel = "continuity_residual_rel";
+inline constexpr const char* kColPressureIterations = "pressure_iterations";
+inline constexpr const char* kColMaxSolidsFraction = "max_solids_fraction";
+inline constexpr const char* kColFlooredCells = "floored_cells";
+
+}  // namespace cgd::schema::names
 
 namespace cgd::schema {
 
@@ -26,7 +59,10 @@ class Series {
   int row_width() const;
   const std::vector<double>& column(const std::string& name) const;  // rows x width, flattened
   void write(const std::string& path, MPI_Comm comm, const Scene& scene) const;
-  /// Read a series file written by `write` (any rank; InputError if unreadable).
+  /// Read and validate a series file written by `write` (any rank): the format and version, `columns`
+  /// naming `time` first, every listed column a dataset of (rows) or (rows, width), `rows` rows each as the
+  /// attribute says, times finite and non-decreasing. InputError naming the file, the dataset or attribute,
+  /// what was found and what was expected.
   static Series read(const std::string& path, MPI_Comm comm);
   /// Warnings of the run (each once), written as the root attribute `warnings` (string list).
   void add_warning(const std::string& text) { warnings_.push_back(text); }
@@ -78,6 +114,9 @@ struct RunSeriesRow {
   std::int64_t floored_cells = 0;     // cells at the void-fraction floor
   std::vector<double> phase_seconds;  // per phase of the layout, run totals
 };
+
+/// A phase timer's column, "time_<phase>_s" ("time_force_integrate_s"): the run's total seconds in the phase.
+std::string phase_column(const std::string& phase);
 
 /// Declares the run columns of `layout` on an empty series, in file order (docs/schema-run.md).
 void declare_run_columns(Series& series, const RunSeriesLayout& layout);

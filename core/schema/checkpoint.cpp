@@ -1,49 +1,14 @@
-// checkpoint.h5 (docs/schema-run.md, "Checkpoint"): writing and reading a run's restart state.
-#include "core/checkpoint.hpp"
+// The checkpoint file (checkpoint.h5, docs/schema-run.md "Checkpoint"): writing and the validating read of a
+// run's restart state. The names are core/schema/checkpoint.hpp's.
+#include "core/schema/checkpoint.hpp"
 
 #include "core/error.hpp"
-#include "core/output.hpp"
 #include "core/schema/check.hpp"
-#include "core/schema/snapshot_names.hpp"
+#include "core/schema/common.hpp"
 
 namespace cgd::checkpoint {
 
-namespace {
-
-/// The checkpoint's datasets and attributes (docs/schema-run.md "Checkpoint"), each spelled once; the fluid
-/// fields' names are kFluidFieldNames (core/checkpoint.hpp), the common attributes schema::write_common's.
-// the root and the particles' id, position, velocity and spin: a snapshot's names (core/schema/snapshot_names.hpp)
-using schema::names::kAngularVelocity;
-using schema::names::kFluid;
-using schema::names::kId;
-using schema::names::kParticles;
-using schema::names::kPosition;
-using schema::names::kRoot;
-using schema::names::kStep;
-using schema::names::kTime;
-using schema::names::kVelocity;
-constexpr const char* kContactCount = "/particles/contact_count";
-constexpr const char* kListAnchor = "/particles/list_anchor";  // version 3
-constexpr const char* kContacts = "/contacts";
-constexpr const char* kPartner = "/contacts/partner";
-constexpr const char* kSpring = "/contacts/spring";
-constexpr const char* kDtPrevious = "dt_previous";  // of /fluid
-constexpr const char* kFluidSteps = "steps";        // of /fluid
-constexpr const char* kRebuildDue = "rebuild_due";
-constexpr const char* kSkin = "skin";
-constexpr const char* kLastSortStep = "last_sort_step";
-constexpr const char* kRanks = "ranks";
-constexpr const char* kRankParticleCounts = "rank_particle_counts";
-constexpr const char* kRankContactCounts = "rank_contact_counts";
-constexpr const char* kWallSeconds = "wall_seconds";
-constexpr const char* kPhaseSeconds = "phase_seconds";
-constexpr const char* kFrameSteps = "frame_steps";
-constexpr const char* kFrameTimes = "frame_times";
-constexpr const char* kFrameCounts = "frame_counts";
-constexpr const char* kPlacementMethod = "placement_method";
-constexpr const char* kNeighborRebuilds = "neighbor_rebuilds";
-
-}  // namespace
+using namespace names;
 
 void write(const std::string& path, MPI_Comm comm, const Scene& scene, const RunState& state,
            const ParticleRows& particles, const FluidRows* fluid) {
@@ -103,7 +68,6 @@ void write(const std::string& path, MPI_Comm comm, const Scene& scene, const Run
 }
 
 namespace {
-
 
 std::int64_t sum(const std::vector<std::int64_t>& v) {
   std::int64_t s = 0;

@@ -1,12 +1,15 @@
-// series.h5 (docs/schema-run.md): the time-series table and a run's columns.
-#include "core/series.hpp"
+// The series file (docs/schema-run.md "Series"): the time-series table, its write and validating read, and
+// a run's columns. The names are core/schema/series.hpp's.
+#include "core/schema/series.hpp"
 
 #include <stdexcept>
 
 #include "core/error.hpp"
-#include "core/output.hpp"
+#include "core/schema/check.hpp"
 
 namespace cgd::schema {
+
+using namespace names;
 
 // ---- Series ----------------------------------------------------------------------------------------------
 
@@ -72,15 +75,15 @@ void Series::write(const std::string& path, MPI_Comm comm, const Scene& scene) c
     write_common(f, kSeries, scene);
     std::vector<std::string> names;
     for (const Column& c : columns_) names.push_back(c.name);
-    f.set_attr("/", "columns", names);
-    f.set_attr("/", "rows", static_cast<std::int64_t>(rows_));
-    if (!warnings_.empty()) f.set_attr("/", "warnings", warnings_);
+    f.set_attr(kRoot, kColumns, names);
+    f.set_attr(kRoot, kRows, static_cast<std::int64_t>(rows_));
+    if (!warnings_.empty()) f.set_attr(kRoot, kWarnings, warnings_);
     for (const Column& c : columns_) {
       const std::string dataset = "/" + c.name;
       std::vector<std::uint64_t> dims{rows_};
       if (c.width > 1) dims.push_back(static_cast<std::uint64_t>(c.width));
       f.write_replicated(dataset, c.values, dims);
-      f.set_attr(dataset, "unit", c.unit);
+      f.set_attr(dataset, kUnit, c.unit);
     }
   });
 }
@@ -89,16 +92,16 @@ Series Series::read(const std::string& path, MPI_Comm comm) {
   h5::File f = h5::File::open_read(path, comm);
   schema::check_format(f, kSeries);
   Series s;
-  if (f.has_attr("/", "warnings")) s.warnings_ = f.attr_strings("/", "warnings");
-  const std::vector<std::string> names = f.attr_strings("/", "columns");
-  if (names.empty() || names.front() != "time")
-    throw InputError(path + ": attribute 'columns' of '/' " +
+  if (f.has_attr(kRoot, kWarnings)) s.warnings_ = f.attr_strings(kRoot, kWarnings);
+  const std::vector<std::string> names = f.attr_strings(kRoot, kColumns);
+  if (names.empty() || names.front() != kColTime)
+    throw InputError(path + ": attribute '" + kColumns + "' of '/' " +
                      (names.empty() ? std::string("is empty") : "starts with '" + names.front() + "'") +
-                     ", expected the column 'time' first");
+                     ", expected the column '" + kColTime + "' first");
   for (const std::string& name : names) {
     const std::string dataset = "/" + name;
     if (!f.exists(dataset))
-      throw InputError(path + ": no dataset '" + dataset + "', expected the column the attribute 'columns' lists");
+      throw InputError(path + ": no dataset '" + dataset + "', expected the column the attribute '" + kColumns + "' lists");
     const std::vector<std::uint64_t> dims = f.dims(dataset);
     if (dims.empty() || dims.size() > 2)
       throw InputError(path + ": dataset '" + dataset + "' has shape " + shape_text(dims) +
@@ -106,57 +109,61 @@ Series Series::read(const std::string& path, MPI_Comm comm) {
     Column c;
     c.name = name;
     c.width = dims.size() == 2 ? static_cast<int>(dims[1]) : 1;
-    c.unit = f.has_attr(dataset, "unit") ? f.attr_string(dataset, "unit") : "";
+    c.unit = f.has_attr(dataset, kUnit) ? f.attr_string(dataset, kUnit) : "";
     // the time column orders the rows (a restart cuts the series back by it): finite and non-decreasing
     c.values = read_doubles(f, dataset, dims, s.columns_.empty() ? Finite::Everywhere : Finite::Not);
     if (s.columns_.empty()) {
       s.rows_ = dims[0];
       for (std::size_t r = 1; r < c.values.size(); ++r)
         if (c.values[r] < c.values[r - 1])
-          throw InputError(path + ": dataset '/time' decreases at row " + std::to_string(r) + " (" +
+          throw InputError(path + ": dataset '/" + kColTime + "' decreases at row " + std::to_string(r) + " (" +
                            std::to_string(c.values[r - 1]) + " then " + std::to_string(c.values[r]) +
                            "), expected non-decreasing times");
     } else if (dims[0] != s.rows_) {
       throw InputError(path + ": dataset '" + dataset + "' has " + std::to_string(dims[0]) + " rows, expected " +
-                       std::to_string(s.rows_) + " (the rows of '/time')");
+                       std::to_string(s.rows_) + " (the rows of '/" + kColTime + "')");
     }
     s.columns_.push_back(std::move(c));
   }
-  if (const std::int64_t rows = f.attr_int("/", "rows"); rows != static_cast<std::int64_t>(s.rows_))
-    throw InputError(path + ": attribute 'rows' of '/' is " + std::to_string(rows) + ", expected " +
-                     std::to_string(s.rows_) + " (the rows of '/time')");
+  if (const std::int64_t rows = f.attr_int(kRoot, kRows); rows != static_cast<std::int64_t>(s.rows_))
+    throw InputError(path + ": attribute '" + kRows + "' of '/' is " + std::to_string(rows) + ", expected " +
+                     std::to_string(s.rows_) + " (the rows of '/" + kColTime + "')");
   f.close();
   return s;
 }
 
 // ---- a run's columns -------------------------------------------------------------------------------
 
+std::string phase_column(const std::string& phase) {
+  return "time_" + phase + "_s";
+}
+
 void declare_run_columns(Series& series, const RunSeriesLayout& layout) {
-  series.add_column("time", 1, "s");
-  series.add_column("step", 1, "1");
-  series.add_column("solids_fraction", 1, "1");
+  series.add_column(kColTime, 1, "s");
+  series.add_column(kColStep, 1, "1");
+  series.add_column(kColSolidsFraction, 1, "1");
   if (layout.fluid_scene) {
-    series.add_column("slip_velocity", 3, "m/s");
-    series.add_column("fluid_velocity_mean", 3, "m/s");
+    series.add_column(kColSlipVelocity, 3, "m/s");
+    series.add_column(kColFluidVelocityMean, 3, "m/s");
   }
-  series.add_column("particle_velocity_mean", 3, "m/s");
-  series.add_column("kinetic_energy", 1, "J");
-  series.add_column("rotational_energy", 1, "J");
-  series.add_column("contact_energy", 1, "J");
-  series.add_column("momentum", 3, "kg m/s");
-  series.add_column("contacts_per_particle", 1, "1");
-  series.add_column("max_overlap_rel", 1, "1");
-  series.add_column("neighbor_rebuilds", 1, "1");
-  series.add_column("wall_seconds", 1, "s");
+  series.add_column(kColParticleVelocityMean, 3, "m/s");
+  series.add_column(kColKineticEnergy, 1, "J");
+  series.add_column(kColRotationalEnergy, 1, "J");
+  series.add_column(kColContactEnergy, 1, "J");
+  series.add_column(kColMomentum, 3, "kg m/s");
+  series.add_column(kColContactsPerParticle, 1, "1");
+  series.add_column(kColMaxOverlapRel, 1, "1");
+  series.add_column(kColNeighborRebuilds, 1, "1");
+  series.add_column(kColWallSeconds, 1, "s");
   if (layout.solves_fluid) {
-    series.add_column("dt_fluid", 1, "s");
-    series.add_column("fluid_kinetic_energy", 1, "J");
-    series.add_column("continuity_residual_rel", 1, "1");
-    series.add_column("pressure_iterations", 1, "1");
-    series.add_column("max_solids_fraction", 1, "1");
-    series.add_column("floored_cells", 1, "1");
+    series.add_column(kColDtFluid, 1, "s");
+    series.add_column(kColFluidKineticEnergy, 1, "J");
+    series.add_column(kColContinuityResidualRel, 1, "1");
+    series.add_column(kColPressureIterations, 1, "1");
+    series.add_column(kColMaxSolidsFraction, 1, "1");
+    series.add_column(kColFlooredCells, 1, "1");
   }
-  for (const std::string& name : layout.phase_names) series.add_column("time_" + name + "_s", 1, "s");
+  for (const std::string& name : layout.phase_names) series.add_column(phase_column(name), 1, "s");
 }
 
 void append_run_row(Series& series, const RunSeriesLayout& layout, const RunSeriesRow& r) {

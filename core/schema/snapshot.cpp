@@ -1,20 +1,14 @@
-// cgd::schema — the file schema of ARCHITECTURE.md "Files" and docs/schema-run.md: common root
-// attributes and /params, and snapshots. The series is core/series.cpp, the checkpoint core/checkpoint.cpp,
-// run.xmf core/xdmf.cpp.
-#include "core/output.hpp"
+// The snapshot file (docs/schema-run.md "Snapshot"): write_snapshot (collective, each rank its own rows and
+// fluid slab) and the validating read_snapshot. The names are core/schema/snapshot.hpp's.
+#include "core/schema/snapshot.hpp"
 
 #include <algorithm>
 #include <array>
 #include <cstring>
-#include <ctime>
-#include <stdexcept>
 
 #include "core/error.hpp"
-#include "core/schema/snapshot_names.hpp"
-
-#ifndef CGD_VERSION
-#define CGD_VERSION "unknown"
-#endif
+#include "core/h5.hpp"
+#include "core/schema/check.hpp"
 
 namespace cgd::schema {
 namespace {
@@ -28,122 +22,6 @@ std::vector<std::int64_t> as_vector(const std::array<int, 3>& v) {
   return {v.begin(), v.end()};
 }
 
-/// UTC now as ISO 8601 ("2025-01-31T12:00:00Z"), taken on rank 0 so every rank writes the same text.
-std::string utc_now_iso8601(MPI_Comm comm) {
-  char text[32] = {};
-  int rank = 0;
-  MPI_Comm_rank(comm, &rank);
-  if (rank == 0) {
-    const std::time_t now = std::time(nullptr);
-    std::tm utc{};
-    gmtime_r(&now, &utc);
-    std::strftime(text, sizeof text, "%Y-%m-%dT%H:%M:%SZ", &utc);
-  }
-  MPI_Bcast(text, sizeof text, MPI_CHAR, 0, comm);
-  text[sizeof text - 1] = '\0';
-  return text;
-}
-
-/// Every field of the scene's config structs and of DerivedScales, SI, the unit in the name.
-/// Keep in step with core/scene.hpp: a field added there belongs here too.
-void write_params(h5::File& f, const Scene& s) {
-  const std::string g = kParams;
-  auto flag = [](bool b) { return std::int64_t{b ? 1 : 0}; };
-  f.create_group(g);
-  f.set_attr(g, kSceneName, s.name);
-  f.set_attr(g, "scene_path", s.source_path);
-  // effects that are on
-  f.set_attr(g, "has_contacts", flag(s.has_contacts()));
-  f.set_attr(g, "has_friction", flag(s.has_friction()));
-  f.set_attr(g, kHasFluid, flag(s.fluid.has_value()));
-  f.set_attr(g, "solves_fluid", flag(s.solves_fluid()));
-
-  // [domain]
-  f.set_attr(g, kBoxSize, as_vector(s.domain.size_m));
-  f.set_attr(g, kGravity, as_vector(s.domain.gravity_m_s2));
-
-  // [particles]
-  const ParticlesConfig& p = s.particles;
-  f.set_attr(g, kDiameter, p.diameter_m);
-  f.set_attr(g, kDensity, p.density_kg_m3);
-  f.set_attr(g, kSolidsFraction, p.solids_fraction);
-  f.set_attr(g, kParcelSize, p.parcel_size);
-  f.set_attr(g, "velocity_rms_m_s", p.velocity_rms_m_s);
-  f.set_attr(g, "seed", static_cast<std::int64_t>(p.seed));
-
-  // [contact]
-  const ContactConfig& c = s.contact;
-  f.set_attr(g, "contact_model", std::string(to_string(c.model)));
-  if (c.gamma_star) f.set_attr(g, "gamma_star", *c.gamma_star);
-  if (c.stiffness_n_N_m) f.set_attr(g, "stiffness_n_N_m", *c.stiffness_n_N_m);
-  f.set_attr(g, "t_star", c.t_star);
-  f.set_attr(g, "restitution", c.restitution);
-  f.set_attr(g, "friction", c.friction);
-  f.set_attr(g, "kn_over_kt", c.kn_over_kt);
-  f.set_attr(g, "gamman_over_gammat", c.gamman_over_gammat);
-  if (c.skin_over_dp) f.set_attr(g, "skin_over_dp", *c.skin_over_dp);  // absent: adaptive
-
-  // [fluid] (absent: dry granular run)
-  if (s.fluid) {
-    const FluidConfig& fl = *s.fluid;
-    f.set_attr(g, kFluidDensity, fl.density_kg_m3);
-    f.set_attr(g, kFluidViscosity, fl.viscosity_Pa_s);
-    f.set_attr(g, "fluid_cells", as_vector(fl.cells));
-    f.set_attr(g, "courant", fl.courant);
-    f.set_attr(g, kCoupling, std::string(to_string(fl.coupling)));
-    f.set_attr(g, kDrag, std::string(to_string(fl.drag)));
-    f.set_attr(g, kPressureGradientForce, flag(fl.pressure_gradient_force));
-    f.set_attr(g, "parcel_correction", flag(fl.parcel_correction));
-    if (!fl.drag_model_path.empty()) {  // drag = "model": the file and its checksum (provenance)
-      f.set_attr(g, "drag_model", fl.drag_model_path);
-      f.set_attr(g, "drag_model_checksum", fl.drag_model_checksum);
-    }
-  }
-
-  // [run]
-  const RunConfig& r = s.run;
-  f.set_attr(g, "end_time_s", r.end_time_s);
-  f.set_attr(g, "dump_interval_s", r.dump_interval_s);
-  f.set_attr(g, "series_interval_s", r.series_interval_s);
-  f.set_attr(g, "checkpoint_wall_s", r.checkpoint_wall_s);
-  f.set_attr(g, "sampling_start_s", r.sampling_start_s);
-  if (r.dt_s) f.set_attr(g, "dt_s", *r.dt_s);
-
-  // [numerics]
-  const NumericsConfig& nm = s.numerics;
-  f.set_attr(g, "void_fraction_floor", nm.void_fraction_floor);
-  f.set_attr(g, "overlap_limit", nm.overlap_limit);
-  f.set_attr(g, "overlap_warning_fraction", nm.overlap_warning_fraction);
-  f.set_attr(g, "viscous_safety", nm.viscous_safety);
-  f.set_attr(g, "drag_safety", nm.drag_safety);
-  f.set_attr(g, "sort_interval_steps", nm.sort_interval_steps);
-  f.set_attr(g, "skin_target_steps", nm.skin_target_steps);
-
-  // derived scales
-  const DerivedScales& d = s.derived;
-  f.set_attr(g, "particle_volume_m3", d.particle_volume_m3);
-  f.set_attr(g, "particle_mass_kg", d.particle_mass_kg);
-  f.set_attr(g, "parcel_diameter_m", d.parcel_diameter_m);
-  f.set_attr(g, "parcel_mass_kg", d.parcel_mass_kg);
-  f.set_attr(g, kUt, d.u_t_m_s);
-  f.set_attr(g, "re_p", d.re_p);
-  f.set_attr(g, "fr_p", d.fr_p);
-  f.set_attr(g, "l_ref_m", d.l_ref_m);
-  f.set_attr(g, kLChar, d.l_char_m);
-  f.set_attr(g, kTref, d.t_ref_s);
-  f.set_attr(g, "stokes_relaxation_s", d.stokes_relaxation_s);
-  f.set_attr(g, "k_n_N_m", d.k_n_N_m);
-  f.set_attr(g, "k_t_N_m", d.k_t_N_m);
-  f.set_attr(g, "gamma_n_kg_s", d.gamma_n_kg_s);
-  f.set_attr(g, "gamma_t_kg_s", d.gamma_t_kg_s);
-  f.set_attr(g, "t_c_s", d.t_c_s);
-  f.set_attr(g, "dt_dem_s", d.dt_dem_s);
-  f.set_attr(g, "dt_fluid_s", d.dt_fluid_s);
-  f.set_attr(g, "cells", as_vector(d.cells));
-  f.set_attr(g, "particle_count", d.particle_count);
-  f.set_attr(g, "memory_estimate_bytes", d.memory_estimate_bytes);
-}
-
 /// One per-particle array of the snapshot: name, data, values per particle, unit.
 struct ParticleArray {
   const char* name;  // the dataset's path
@@ -154,16 +32,6 @@ struct ParticleArray {
 };
 
 }  // namespace
-
-void write_common(h5::File& file, const Format& format, const Scene& scene) {
-  using namespace names;
-  file.set_attr(kRoot, kFormat, std::string(format.name));
-  file.set_attr(kRoot, kFormatVersion, format.version);
-  file.set_attr(kRoot, kCodeVersion, std::string(CGD_VERSION));
-  file.set_attr(kRoot, kCreated, utc_now_iso8601(file.comm()));
-  file.set_attr(kRoot, kScene, scene.effective_toml);
-  write_params(file, scene);
-}
 
 void write_snapshot(const std::string& path, MPI_Comm comm, const Scene& scene, double time_s,
                     std::int64_t step, const ParticleFields& particles, const FluidFields* fluid) {
@@ -283,6 +151,99 @@ void write_snapshot(const std::string& path, MPI_Comm comm, const Scene& scene, 
                              "pressure_gradient_mean) removed"));
     }
   });
+}
+
+
+Snapshot read_snapshot(const std::string& path, SnapshotContent content, MPI_Comm comm) {
+  h5::File f = h5::File::open_read(path, comm);
+  check_format(f, kSnapshot);
+  Snapshot s;
+  s.path = path;
+  s.time_s = finite_attr(f, kRoot, kTime);
+  s.step = f.attr_int(kRoot, kStep);
+  if (s.step < 0) throw InputError(path + ": attribute '" + kStep + "' of '/' is " + std::to_string(s.step) + ", expected >= 0");
+  s.physics = read_run_physics(f);
+
+  // Every particle array holds N rows, N the length of /particles/id.
+  const std::string n_rows = std::string("N particles, the length of ") + kId;
+  const std::uint64_t n = require_shape(f, kId, {kAnyExtent}).at(0);
+  s.count = static_cast<std::int64_t>(n);
+  const bool coupled = f.exists(kDragCoefficient);
+  const std::vector<std::pair<const char*, std::vector<std::uint64_t>>> particle_shapes = {
+      {kPosition, {n, 3}}, {kVelocity, {n, 3}}, {kParticleDiameter, {n}}};
+  for (const auto& [name, shape] : particle_shapes) require_shape(f, name, shape, n_rows);
+  if (f.exists(kAngularVelocity)) require_shape(f, kAngularVelocity, {n, 3}, n_rows);
+  if (coupled)  // the fluid's values at the particles come together (write_snapshot above)
+    for (const auto& [name, shape] : std::vector<std::pair<const char*, std::vector<std::uint64_t>>>{
+             {kFluidVelocityAtParticles, {n, 3}}, {kPressureGradient, {n, 3}}})
+      require_shape(f, name, shape, n_rows + "; written with " + kDragCoefficient);
+
+  s.has_fluid = f.exists(kFluid);
+  std::vector<std::uint64_t> cells3, cells3x3;  // (n_z, n_y, n_x) and (n_z, n_y, n_x, 3)
+  if (s.has_fluid) {
+    const std::vector<std::int64_t> cells = f.attr_ints(kFluid, kCells);
+    if (cells.size() != 3)
+      throw InputError(path + ": attribute '" + std::string(kCells) + "' of '" + kFluid + "' holds " + std::to_string(cells.size()) +
+                       " values, expected 3 (x, y, z)");
+    const std::vector<double> spacing = finite_attrs(f, kFluid, kSpacing, 3);
+    const std::vector<double> origin = finite_attrs(f, kFluid, kOrigin, 3);
+    for (int a = 0; a < 3; ++a) {
+      if (cells[a] <= 0 || cells[a] > (1 << 20) || !(spacing[a] > 0))
+        throw InputError(path + ": " + kFluid + " has cells " + std::to_string(cells[a]) + " and spacing " +
+                         std::to_string(spacing[a]) + " along axis " + std::to_string(a) +
+                         ", expected a positive cell count and spacing");
+      s.grid.cells[a] = static_cast<int>(cells[a]);
+      s.grid.spacing_m[a] = spacing[a];
+      s.grid.origin_m[a] = origin[a];
+    }
+    cells3 = {static_cast<std::uint64_t>(cells[2]), static_cast<std::uint64_t>(cells[1]),
+              static_cast<std::uint64_t>(cells[0])};
+    cells3x3 = cells3;
+    cells3x3.push_back(3);
+    const std::string grid = std::string("the grid's cells, ") + kFluid + " attribute '" + kCells + "' = (" + std::to_string(cells[0]) + ", " +
+                             std::to_string(cells[1]) + ", " + std::to_string(cells[2]) + ")";
+    require_shape(f, kVoidFraction, cells3, grid);
+    require_shape(f, kPressure, cells3, grid);
+    require_shape(f, kCellVelocity, cells3x3, grid);
+    if (f.exists(kEpsVelocity)) require_shape(f, kEpsVelocity, cells3x3, grid);
+  }
+  if (content == SnapshotContent::HeaderOnly) return s;
+
+  s.id = read_ints(f, kId, {n});
+  std::vector<char> seen(n, 0);
+  for (std::size_t i = 0; i < n; ++i) {
+    const std::int64_t id = s.id[i];
+    if (id < 0 || static_cast<std::uint64_t>(id) >= n || seen[static_cast<std::size_t>(id)])
+      throw InputError(path + ": dataset '" + kId + "' holds " + std::to_string(id) + " at row " + std::to_string(i) +
+                       ", expected distinct ids in [0, " + std::to_string(n) + ")");
+    seen[static_cast<std::size_t>(id)] = 1;
+  }
+  s.position = read_doubles(f, kPosition, {n, 3}, Finite::Everywhere, n_rows);
+  s.velocity = read_doubles(f, kVelocity, {n, 3}, Finite::Everywhere, n_rows);
+  if (coupled) {
+    s.drag_coefficient = read_doubles(f, kDragCoefficient, {n}, Finite::Everywhere, n_rows);
+    s.fluid_velocity = read_doubles(f, kFluidVelocityAtParticles, {n, 3}, Finite::Everywhere, n_rows);
+    s.pressure_gradient = read_doubles(f, kPressureGradient, {n, 3}, Finite::Everywhere, n_rows);
+  }
+  if (!s.has_fluid) return s;
+  const auto cells = static_cast<std::int64_t>(s.grid.cell_count());
+  s.void_fraction = read_doubles(f, kVoidFraction, cells3, Finite::Everywhere);
+  for (std::int64_t c = 0; c < cells; ++c)
+    if (!(s.void_fraction[c] > 0))
+      throw InputError(path + ": dataset '" + kVoidFraction + "' holds " + std::to_string(s.void_fraction[c]) +
+                       " at cell " + std::to_string(c) + ", expected values > 0");
+  s.pressure = read_doubles(f, kPressure, cells3, Finite::Everywhere);
+  s.cell_velocity = read_doubles(f, kCellVelocity, cells3x3, Finite::Everywhere);
+  if (f.exists(kEpsVelocity)) {
+    s.eps_velocity = read_doubles(f, kEpsVelocity, cells3x3, Finite::Everywhere);
+    s.eps_velocity_from_file = true;
+  } else {
+    const std::vector<double>& u = s.cell_velocity;
+    s.eps_velocity.resize(u.size());
+    for (std::int64_t c = 0; c < cells; ++c)
+      for (int d = 0; d < 3; ++d) s.eps_velocity[3 * c + d] = s.void_fraction[c] * u[3 * c + d];
+  }
+  return s;
 }
 
 }  // namespace cgd::schema

@@ -1,9 +1,11 @@
 #pragma once
-// checkpoint.h5 of a run directory (docs/schema-run.md, "Checkpoint"): everything a restart needs to
-// continue a run bit for bit -- the DEM state (unwrapped positions, leapfrog velocities, the contact
-// histories keyed by partner id), the neighbour-list bookkeeping, the fluid state and the run's own
-// bookkeeping (wall time, phase timers, snapshot frames). The one place that knows its layout; the
-// engine (sim/run.cpp) fills and consumes the plain structs below.
+// The checkpoint file (cgd_format "checkpoint", checkpoint.h5 of a run directory, docs/schema-run.md
+// "Checkpoint"): its one home. Everything a restart needs to continue a run bit for bit -- the DEM state
+// (unwrapped positions, leapfrog velocities, the contact histories keyed by partner id), the neighbour-list
+// bookkeeping, the fluid state and the run's own bookkeeping (wall time, phase timers, snapshot frames).
+// The names (each spelled once, below; the particles' id, position, velocity and spin and the root's step
+// and time are a snapshot's, core/schema/snapshot.hpp), the plain structs the engine (sim/run_checkpoint.cpp)
+// fills and consumes, one write and one validating read (Reader).
 #include <mpi.h>
 
 #include <array>
@@ -13,6 +15,42 @@
 
 #include "core/h5.hpp"
 #include "core/scene.hpp"
+#include "core/schema/snapshot.hpp"  // the names shared with snapshots
+
+namespace cgd::checkpoint::names {
+
+// the root, /particles id, position, velocity and angular_velocity, /fluid, step and time: a snapshot's
+using schema::names::kAngularVelocity;
+using schema::names::kFluid;
+using schema::names::kId;
+using schema::names::kParticles;
+using schema::names::kPosition;
+using schema::names::kRoot;
+using schema::names::kStep;
+using schema::names::kTime;
+using schema::names::kVelocity;
+inline constexpr const char* kContactCount = "/particles/contact_count";
+inline constexpr const char* kListAnchor = "/particles/list_anchor";  // version 3
+inline constexpr const char* kContacts = "/contacts";
+inline constexpr const char* kPartner = "/contacts/partner";
+inline constexpr const char* kSpring = "/contacts/spring";
+inline constexpr const char* kDtPrevious = "dt_previous";  // of /fluid
+inline constexpr const char* kFluidSteps = "steps";        // of /fluid
+inline constexpr const char* kRebuildDue = "rebuild_due";
+inline constexpr const char* kSkin = "skin";
+inline constexpr const char* kLastSortStep = "last_sort_step";
+inline constexpr const char* kRanks = "ranks";
+inline constexpr const char* kRankParticleCounts = "rank_particle_counts";
+inline constexpr const char* kRankContactCounts = "rank_contact_counts";
+inline constexpr const char* kWallSeconds = "wall_seconds";
+inline constexpr const char* kPhaseSeconds = "phase_seconds";
+inline constexpr const char* kFrameSteps = "frame_steps";
+inline constexpr const char* kFrameTimes = "frame_times";
+inline constexpr const char* kFrameCounts = "frame_counts";
+inline constexpr const char* kPlacementMethod = "placement_method";
+inline constexpr const char* kNeighborRebuilds = "neighbor_rebuilds";
+
+}  // namespace cgd::checkpoint::names
 
 namespace cgd::checkpoint {
 
