@@ -165,6 +165,14 @@ def snapshot_cells(path, n_cells, from_tref):
                 fine_volume=fine_volume, **consts)
 
 
+def cell_velocities(snap):
+    """u_c (the fluid's Favre velocity) and v_c (the particles' volume-weighted mean velocity, 0 in an empty cell),
+    y components, per coarse cell of a snapshot_cells result."""
+    occupied = snap["solids"] > 0
+    v_c = np.where(occupied, snap["momentum"] / np.where(occupied, snap["solids"], 1.0), 0.0)
+    return snap["eu"] / snap["e"], v_c
+
+
 def run_snapshots(run):
     files = sorted(glob.glob(os.path.join(run, "snapshots", "*.h5")))
     if not files:
@@ -182,10 +190,8 @@ def analyse(runs, n_cells, from_tref, bin_width):
             if snap is None:
                 continue
             used += 1
-            occupied = snap["solids"] > 0
             phi = snap["solids"] / snap["cell_volume"]
-            v_c = np.where(occupied, snap["momentum"] / np.where(occupied, snap["solids"], 1.0), 0.0)
-            u_c = snap["eu"] / snap["e"]
+            u_c, v_c = cell_velocities(snap)
             slip_c = (u_c - v_c) / snap["u_t"]
             weight = snap["solids"] / snap["solids"].sum()  # particle (volume) weight of each cell
             phi_p = phi[snap["flat"]]                    # each particle's cell phi

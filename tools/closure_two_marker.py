@@ -39,16 +39,14 @@ def particles(run, n_cells, from_tref, every):
     """phi_c, D_i, s_c, s_i of every particle of the window's snapshots (every K-th) of one run."""
     phi, drag, cell_slip, own_slip = [], [], [], []
     used = 0
-    for k, path in enumerate(cd.run_snapshots(run)):
+    for path in cd.run_snapshots(run):
         snap = cd.snapshot_cells(path, n_cells, from_tref)
         if snap is None:
             continue
         used += 1
         if (used - 1) % every:
             continue
-        occupied = snap["solids"] > 0
-        v_c = np.where(occupied, snap["momentum"] / np.where(occupied, snap["solids"], 1.0), 0.0)
-        u_c = snap["eu"] / snap["e"]
+        u_c, v_c = cd.cell_velocities(snap)
         flat = snap["flat"]
         phi.append(snap["solids"][flat] / snap["cell_volume"])
         drag.append(snap["drag_share"])
@@ -95,10 +93,10 @@ def main():
     out = [f"Coarse grid of {a.cells} cells across; runs {', '.join(names)}; snapshots from {a.from_tref:g} t_ref "
            f"(every {a.every}); drag D in weights, slips in u_t.", "",
            "| φ_c bin | particles | ratio B | cell slip: a | b | own slip: a' | b' |", "|---|---|---|---|---|---|---|"]
-    for lo in edges[:-1]:
-        if sum(int(in_bin(lo)(r).sum()) for r in data) < a.min:
-            continue
-        f = fit(data, in_bin(lo))
+    counts = [sum(int(in_bin(lo)(r).sum()) for r in data) for lo in edges[:-1]]
+    pooled = {b: fit(data, in_bin(lo)) for b, lo in enumerate(edges[:-1]) if counts[b] >= a.min}
+    for b, f in pooled.items():
+        lo = edges[b]
         out.append(f"| {lo:.2f}–{lo + a.bin:.2f} | {f.n} | {f.B:.3f} | {f.a_c:+.3f} | {f.b_c:.3f} | "
                    f"{f.a_i:+.3f} | {f.b_i:.3f} |")
     out += ["", "Held out: each run's bin drag predicted by the closures fitted on the other runs "
@@ -131,21 +129,21 @@ def main():
     if a.o:
         with open(a.o + ".md", "w") as fh:
             fh.write(text + "\n")
-        plot(data, names, edges, a, in_bin, a.o + ".png")
+        plot(data, names, edges, a, in_bin, counts, pooled, a.o + ".png")
     return 0
 
 
-def plot(data, names, edges, a, in_bin, path):
-    """Mean D per cell-slip bin (0.1 u_t) of each run, in the four phi_c bins holding the most particles."""
+def plot(data, names, edges, a, in_bin, counts, pooled, path):
+    """Mean D per cell-slip bin (0.1 u_t) of each run, in the four phi_c bins holding the most particles (counts:
+    the particles of each bin, pooled: the pooled fits of the bins holding at least --min)."""
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
-    counts = [sum(int(in_bin(lo)(r).sum()) for r in data) for lo in edges[:-1]]
-    top = sorted(b for b in np.argsort(counts)[::-1][:4] if counts[b] >= a.min)
+    top = sorted(b for b in np.argsort(counts)[::-1][:4] if b in pooled)
     fig, axes = plt.subplots(1, len(top), figsize=(4 * len(top), 3.6), squeeze=False)
     for ax, b in zip(axes[0], top):
         lo = edges[b]
-        f = fit(data, in_bin(lo))
+        f = pooled[b]
         for r, name in zip(data, names):
             sel = in_bin(lo)(r)
             s_bins = np.floor(r["s_c"][sel] / 0.1).astype(int)
