@@ -47,6 +47,19 @@ grep -q -- "cgd-coarse --summarise $tmp/out/generate/phi0.05_s2 --from-tref 20 -
 grep -q "phi0.05_c4_a2_micro_s1 .*--reference $tmp/out/generate/phi0.05 " <<<"$n" && ok "half: cgd-coarse --reference the seed-1 run" ||
   fail "half: coarse --reference"
 
+# ---- PHI_SET_<phi>: the half profile's dense runs at gamma* = 1e-3, its dilute runs' parameters untouched ----
+n=$(mk PROFILE=half PHIS=0.05,0.20 EXTRA_RESOLVED= ALPHA1_PHIS=0.05 all)
+base='BASE_SCENE=data/scenes/pipeline_demo.toml GENERATE_SET=domain.size_dp=[53,213,53] contact.gamma_star=2e-3 run.end_time_tref=50'
+grep -qF -- "\"$base phi=0.05\" --" <<<"$n" && grep -qF -- "\"$base phi=0.20 PHI_SET=contact.gamma_star=1e-3\" --" <<<"$n" &&
+  grep -q -- "--set particles.solids_fraction=0.20 .*--set contact.gamma_star=2e-3 --set run.end_time_tref=50 --set contact.gamma_star=1e-3$" <<<"$n" &&
+  ! grep -q -- "--set particles.solids_fraction=0.05 .*gamma_star=1e-3" <<<"$n" &&
+  ok "half: PHI_SET_0.20 sets gamma* = 1e-3 last, in the 0.20 run's params only (the 0.05 run's are as before)" ||
+  fail "half: PHI_SET_0.20 of the resolved runs"
+grep -q "coarse/phi0.20_c4_a3_micro_s1 .*--set contact.gamma_star=1e-3$" <<<"$n" && ! grep -q "coarse/phi0.05_c4_a3_micro_s1 .*gamma_star=1e-3" <<<"$n" &&
+  ok "half: PHI_SET_0.20 reaches the coarse runs at 0.20 only" || fail "half: PHI_SET_0.20 of the coarse runs"
+n=$(mk PROFILE=half PHIS=0.05,0.20 EXTRA_RESOLVED= ALPHA1_PHIS=0.05 PHI_SET_0.20= generate)
+! grep -q "gamma_star=1e-3" <<<"$n" && ok "half: PHI_SET_0.20= (empty) drops it" || fail "half: an empty PHI_SET_0.20 still sets"
+
 # ---- demo defaults and help ----
 n=$(mk PROFILE=demo all)
 grep -q -- "--grids 6,5,4,3" <<<"$n" && ! grep -q "_s2/DONE\|phi0.05_s2 " <<<"$(grep generate <<<"$n")" &&
