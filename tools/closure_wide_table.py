@@ -1,11 +1,12 @@
 #!/usr/bin/python3
-"""The wide-filter experiment's table (scripts/closure_wide_filter.sh; docs/closure.md "A filter wider than the cell").
+"""The closure experiments' table (scripts/closure_wide_filter.sh, scripts/closure_drift.sh; docs/closure.md).
 
 usage: tools/closure_wide_table.py DIR
 
 DIR holds resolved_phi<phi>.h5 (cgd-coarse --summarise of each resolved run over its sampling window) and the coarse
 runs phi<phi>_a<alpha>_<closure>_s<seed>/summary.h5, <closure> = g<G> (the perfect table of the grid of G cells
-across) or r<r> (the fitted model at fluid.filter_to_grid_ratio = r). Prints a markdown table: per phi, closure and
+across), r<r> (the fitted model at fluid.filter_to_grid_ratio = r) or one of the names of LABELS (the drift
+experiment's closures). Prints a markdown table: per phi, closure and
 alpha, the relative error of the slip against the resolved run, mean over the seeds +- the standard error of that
 mean (the seeds' scatter / sqrt(n); one seed: the run's own batch-means error), and the seeds' count; then per
 closure the rms and the worst of the means over every phi and alpha.
@@ -18,7 +19,16 @@ import sys
 
 import h5py
 
-NAME = re.compile(r"^phi(?P<phi>[0-9.]+)_a(?P<alpha>[0-9]+)_(?P<closure>[gr][0-9.]+)_s(?P<seed>[0-9]+)$")
+NAME = re.compile(r"^phi(?P<phi>[0-9.]+)_a(?P<alpha>[0-9]+)_(?P<closure>[gr][0-9.]+|[a-z][a-z0-9]*)_s(?P<seed>[0-9]+)$")
+# the named closures of scripts/closure_drift.sh, in the order the table lists them
+LABELS = {
+    "driftheld": "drift table, held out",
+    "driftown": "drift table of the run itself (perfect twin)",
+    "tableheld": "phi-bar table, held out",
+    "tableown": "phi-bar table of the run itself (perfect)",
+    "radl": "radl2014",
+    "micro": "micro (no correction)",
+}
 
 
 def attr(path, key):
@@ -27,7 +37,18 @@ def attr(path, key):
 
 
 def closure_label(c):
+    if c in LABELS:
+        return LABELS[c]
     return f"perfect table of the {c[1:]}-cell grid" if c[0] == "g" else f"model, r = {c[1:]}"
+
+
+def closure_order(c):
+    """The named closures first in LABELS's order, then g<G> and r<r> by kind and number."""
+    if c in LABELS:
+        return (0, list(LABELS).index(c), 0.0)
+    if re.fullmatch(r"[gr][0-9.]+", c):
+        return (1 if c[0] == "g" else 2, 0, float(c[1:]))
+    return (3, 0, 0.0)
 
 
 def main(argv):
@@ -53,7 +74,7 @@ def main(argv):
     print("| ⟨φ⟩ | resolved slip/u_t | closure | α | error of the slip | seeds |")
     print("|---|---|---|---|---|---|")
     per_closure = {}
-    for (phi, c, alpha) in sorted(runs, key=lambda k: (float(k[0]), k[1][0], float(k[1][1:]), k[2])):
+    for (phi, c, alpha) in sorted(runs, key=lambda k: (float(k[0]), closure_order(k[1]), k[2])):
         e = [x[0] for x in runs[(phi, c, alpha)]]
         n = len(e)
         mean = sum(e) / n
@@ -63,7 +84,7 @@ def main(argv):
     print()
     print("| closure | rms of the means | worst | configurations |")
     print("|---|---|---|---|")
-    for c in sorted(per_closure, key=lambda c: (c[0], float(c[1:]))):
+    for c in sorted(per_closure, key=closure_order):
         m = per_closure[c]
         rms = math.sqrt(sum(x * x for x in m) / len(m))
         worst = max(m, key=abs)

@@ -4,7 +4,9 @@
 Synthetic summaries: resolved <phi> = 0.05 slip 1.00; perfect table of grid 4 (g4) at alpha 3, seeds 1-3 with slips
 0.90, 0.92, 0.94 (errors -10, -8, -6 %: mean -8.0 %, scatter sd 2 %, standard error 2/sqrt(3) = 1.15 %); the model
 at r = 2 at alpha 3, one seed, slip 1.05 +- 0.02 (error +5.0 +- 2.0 %, the run's own error); a directory with
-another name pattern and one at a phi with no reference are ignored. rms per closure: g4 8.0 %, r2 5.0 %.
+another name pattern and one at a phi with no reference are ignored; a named closure (driftheld, alpha 3, one seed,
+slip 0.97 +- 0.01: -3.0 +- 1.0 %) is listed under its label before the numbered ones. rms per closure: g4 8.0 %,
+r2 5.0 %, driftheld 3.0 %.
 usage: /usr/bin/python3 tests/tools/closure_wide_table.py SOURCE_DIR"""
 import os
 import subprocess
@@ -37,6 +39,7 @@ with tempfile.TemporaryDirectory() as d:
     for seed, slip in ((1, 0.90), (2, 0.92), (3, 0.94)):
         summary(os.path.join(d, f"phi0.05_a3_g4_s{seed}", "summary.h5"), slip, 0.005)
     summary(os.path.join(d, "phi0.05_a3_r2_s1", "summary.h5"), 1.05, 0.02)
+    summary(os.path.join(d, "phi0.05_a3_driftheld_s1", "summary.h5"), 0.97, 0.01)
     summary(os.path.join(d, "phi0.10_a3_g4_s1", "summary.h5"), 0.5, 0.01)  # no reference: ignored
     summary(os.path.join(d, "other_run", "summary.h5"), 0.5, 0.01)  # not the pattern: ignored
     p = subprocess.run([sys.executable, tool, d], capture_output=True, text=True)
@@ -47,6 +50,10 @@ with tempfile.TemporaryDirectory() as d:
     check("| 0.05 | 1.000 | model, r = 2 | 3 | +5.0 ± 2.0 % | 1 |" in out, "r2: one seed, its own error")
     check("| perfect table of the 4-cell grid | 8.0 % | -8.0 % | 1 |" in out, "rms and worst of g4")
     check("| model, r = 2 | 5.0 % | +5.0 % | 1 |" in out, "rms and worst of r2")
+    check("| 0.05 | 1.000 | drift table, held out | 3 | -3.0 ± 1.0 % | 1 |" in out, "a named closure: its label")
+    check("| drift table, held out | 3.0 % | -3.0 % | 1 |" in out, "rms and worst of the named closure")
+    check(out.index("drift table, held out") < out.index("perfect table of the 4-cell grid"),
+          "named closures are listed first")
     check("0.10" not in out, "a phi without a reference is left out")
 print(f"{failures} failed" if failures else "all passed")
 sys.exit(1 if failures else 0)
