@@ -1,0 +1,120 @@
+#!/usr/bin/env bash
+# The drift-velocity closure's held-out validation (issue 28; docs/closure.md "The drift-velocity closure",
+# docs/coarse.md): on the half box's 4-cell grid (13.25 d_p), coarse parcel runs with
+#   driftheld  the drift table H(phi-bar, s-hat) fitted WITHOUT the run it predicts (cgd-fit --drift-table on the
+#              other runs' filtered files): the closure under test;
+#   driftown   the drift table of the run itself: its perfect twin (what the form can do at best);
+#   tableheld  the phi-bar-only table of the grid fitted without the run (the phi-bar closure held out);
+#   tableown   the phi-bar-only table of the run itself: the perfect closure of docs/coarse.md;
+#   radl       radl2014, the published model;
+# each at alpha = ALPHAS and realisations SEEDS, c_corr off for the tables (the grid's own correction; radl2014 keeps
+# the paper's c_corr(alpha)), the
+# pipeline's coarse settings (the half profile's COARSE_SET: sampled 40-80 t_ref); then the table of the slip
+# error against each resolved run (tools/closure_wide_table.py) -> DIR/table.md.
+#
+# usage: scripts/closure_drift.sh OUT [PHIS=0.02,0.05,0.10] [ALPHAS=3,4,6] [SEEDS=1,2,3] [CLOSURES=...]
+#   OUT: a `Makefile.pipeline PROFILE=half` output directory whose OUT/generate/<run>/DONE exist for every phi of
+#        PHIS. Every finished resolved run of OUT/generate (phi<phi> and phi<phi>_s<seed>) is filtered and pooled:
+#        a held-out table for phi leaves out every run at that phi (all its seeds).
+# Results go to OUT/closure_drift (DIR). A coarse run whose summary.h5 exists is not run again; a filtered file or
+# table that exists is kept (delete it to make it again).
+# Environment: BUILD (default build), NICE (default 0), CELLS (default 4), DRIFT_FILTER_ARGS (more cgd-filter
+# options, e.g. the slip bins), OWN_DEPOSIT (default true; false: every coarse run's drag leaves the parcel's own
+# deposit out of its phi, fluid.drag_own_deposit = false, docs/closure.md; the runs go to DIR/noself, the tables
+# and filtered files are shared).
+set -euo pipefail
+repo=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
+out=${1:?usage: closure_drift.sh OUT [PHIS] [ALPHAS] [SEEDS] [CLOSURES]}
+IFS=, read -r -a phis <<< "${2:-0.02,0.05,0.10}"
+IFS=, read -r -a alphas <<< "${3:-3,4,6}"
+IFS=, read -r -a seeds <<< "${4:-1,2,3}"
+IFS=, read -r -a closures <<< "${5:-driftheld,driftown,tableheld,tableown,radl}"
+build=${BUILD:-$repo/build}
+nice_level=${NICE:-0}
+cells=${CELLS:-4}
+read -r -a drift_filter_args <<< "${DRIFT_FILTER_ARGS:-}"
+from_tref=20
+mk() { make -s -f "$repo/Makefile.pipeline" PROFILE=half "$@"; }
+base_scene=$(cd "$repo" && mk print-BASE_SCENE)
+box_dp=$(cd "$repo" && mk print-BOX_DP)
+read -r -a coarse_set <<< "$(cd "$repo" && mk print-COARSE_SET)"
+dx=$(python3 -c "print($box_dp/$cells)")
+dir=$out/closure_drift
+own_deposit=${OWN_DEPOSIT:-true}
+case $own_deposit in true | false) ;; *) echo "closure_drift.sh: OWN_DEPOSIT=$own_deposit: allowed true, false" >&2; exit 2 ;; esac
+runs_dir=$dir
+[ "$own_deposit" = false ] && runs_dir=$dir/noself
+mkdir -p "$dir" "$runs_dir"
+say() { echo "[closure_drift] $*" >&2; }
+
+# every finished resolved run, filtered on its own (so that any pool can be formed from the files)
+runs=()
+for done_file in "$out"/generate/phi*/DONE; do
+  [ -f "$done_file" ] || continue
+  runs+=("$(basename "$(dirname "$done_file")")")
+done
+[ ${#runs[@]} -gt 0 ] || { echo "closure_drift.sh: no finished resolved run in $out/generate" >&2; exit 2; }
+for phi in "${phis[@]}"; do
+  [ -f "$out/generate/phi$phi/DONE" ] || { echo "closure_drift.sh: $out/generate/phi$phi is not a finished run" >&2; exit 2; }
+done
+phi_of() { local r=${1#phi}; echo "${r%%_s*}"; }
+for r in "${runs[@]}"; do
+  [ -f "$dir/filtered_$r.h5" ] && continue
+  say "filter $r on the $cells-cell grid"
+  nice -n "$nice_level" "$build/cgd-filter" "$out/generate/$r" --from-tref $from_tref --grids "$cells" --samples 0 \
+    "${drift_filter_args[@]}" --force --quiet -o "$dir/filtered_$r.h5"
+done
+# the tables: own = the runs at phi; held = every other run
+for phi in "${phis[@]}"; do
+  own=() held=()
+  for r in "${runs[@]}"; do
+    if [ "$(phi_of "$r")" = "$phi" ]; then own+=("$dir/filtered_$r.h5"); else held+=("$dir/filtered_$r.h5"); fi
+  done
+  [ ${#held[@]} -gt 0 ] || { echo "closure_drift.sh: no run besides phi = $phi to fit a held-out table on" >&2; exit 2; }
+  fit() {  # output, option, files...
+    local o=$1 opt=$2
+    shift 2
+    [ -f "$o" ] && return 0
+    "$build/cgd-fit" "$@" "$opt" "$cells" --force -o "$o" > "${o%.h5}.report.txt" 2>&1 ||
+      { cat "${o%.h5}.report.txt" >&2; exit 1; }
+  }
+  fit "$dir/driftown_phi$phi.h5" --drift-table "${own[@]}"
+  fit "$dir/driftheld_phi$phi.h5" --drift-table "${held[@]}"
+  fit "$dir/tableown_phi$phi.h5" --grid-table "${own[@]}"
+  fit "$dir/tableheld_phi$phi.h5" --grid-table "${held[@]}"
+  ref=$dir/resolved_phi$phi.h5
+  [ -f "$ref" ] || "$build/cgd-coarse" --summarise "$out/generate/phi$phi" --from-tref $from_tref --force -o "$ref" > /dev/null
+done
+
+coarse() {  # name phi alpha seed, extra args...
+  local name=$1 phi=$2 alpha=$3 seed=$4
+  shift 4
+  local run=$runs_dir/$name
+  [ -f "$run/summary.h5" ] && return 0
+  rm -rf "$run"
+  say "$name"
+  local sets=()
+  for s in "${coarse_set[@]}"; do sets+=(--set "$s"); done
+  nice -n "$nice_level" "$build/cgd-coarse" "$repo/$base_scene" --quiet "${sets[@]}" \
+    --set particles.solids_fraction="$phi" --set particles.seed="$seed" --set fluid.dx_over_dp="$dx" \
+    --set particles.parcel_size="$alpha" --set fluid.drag_own_deposit="$own_deposit" "$@" -o "$run" > "$run.log" 2>&1 ||
+    { say "$name failed (log $run.log)"; return 0; }
+}
+for phi in "${phis[@]}"; do
+  for alpha in "${alphas[@]}"; do
+    for seed in "${seeds[@]}"; do
+      for c in "${closures[@]}"; do
+        case $c in
+          driftheld | driftown)
+            args=(--set fluid.drag=drift --set fluid.drag_model="$dir/${c}_phi$phi.h5" --set fluid.parcel_correction=false) ;;
+          tableheld | tableown) args=(--model "$dir/${c}_phi$phi.h5" --set fluid.parcel_correction=false) ;;
+          radl) args=(--set fluid.drag=radl2014) ;;  # with the paper's c_corr(alpha), as the pipeline runs it
+          *) echo "closure_drift.sh: closure $c is not one of driftheld, driftown, tableheld, tableown, radl" >&2; exit 2 ;;
+        esac
+        coarse "phi${phi}_a${alpha}_${c}_s$seed" "$phi" "$alpha" "$seed" "${args[@]}"
+      done
+    done
+  done
+done
+[ "$runs_dir" = "$dir" ] || for f in "$dir"/resolved_phi*.h5; do ln -sf "$f" "$runs_dir/"; done
+/usr/bin/python3 "$repo/tools/closure_wide_table.py" "$runs_dir" | tee "$runs_dir/table.md"
