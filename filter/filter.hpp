@@ -16,7 +16,7 @@
 //   H        = 1 - sum N_i / sum M_i   (how a coarse run uses it: beta_bar = (1 - H) beta_micro)
 // and a 95 % interval of H from a block bootstrap over snapshots (see statistics.hpp).
 //
-// The drift-velocity closure's sums (issue 28; docs/filter.md "The drift table's sums"), per coarse grid (--grids)
+// The drift-velocity closure's sums (issue 28; docs/closure.md "The drift-velocity closure"), per coarse grid (--grids)
 // and per (phi_tilde, s_hat) bin: vbar_c = sum_i w_ic v_i / sum_i w_ic, the TSC deposit of the snapshot's particle
 // velocities on the grid (equal volumes: V cancels; a cell with no deposit: u_C, zero slip), interpolated back,
 // vbar_i = sum_c w_ic vbar_c; the cell slip s~_i = u~_i - vbar_i, s_hat_i = |s~_i| / u_t; with the grid's M_i and N_i

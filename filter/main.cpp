@@ -50,7 +50,7 @@ int main(int argc, char** argv) {
     std::string slip_bins;
     app.add_option("--slip-bins", slip_bins,
                    "bins of the cell slip |u~ - vbar| / u_t of the drift-velocity closure's sums (with --grids; "
-                   "docs/filter.md): WIDTH or WIDTH,MAX (default 0.1,3: [0, 3) u_t in steps of 0.1)");
+                   "docs/closure.md): WIDTH or WIDTH,MAX (default 0.1,3: [0, 3) u_t in steps of 0.1)");
     app.add_option("--from-time", from_time, "drop snapshots before this time (s)");
     app.add_option("--from-tref", from_tref, "drop snapshots before this time (units of t_ref = u_t/g)");
     app.add_option("--samples", o.samples, "also store N random per-particle records per width");

@@ -145,7 +145,7 @@ std::string fit_report(const FitResult& result, const std::vector<FilteredFile>&
 std::string write_grid_table_model(const std::string& path, const std::vector<FilteredFile>& files, int cells_across,
                                    std::int64_t min_count, const Scene& scene);
 
-/// The drift-velocity closure's table (cgd-fit --drift-table N, docs/fit.md "The drift table"): the drift sums of
+/// The drift-velocity closure's table (cgd-fit --drift-table N, docs/closure.md "The drift-velocity closure"): the drift sums of
 /// the grid of N cells across (`/grids/<N>/drift` of cgd-filter --grids), pooled over the files, as the table
 /// H(phi_k, s_m) = numerator / denominator of a model file with curves = "drift_table" on the bins' centres. Rows:
 /// the phi bins whose phi-only H_grid has >= min_count samples (with a non-zero micro sum); a (phi, slip) bin is

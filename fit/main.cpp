@@ -76,7 +76,7 @@ int main(int argc, char** argv) {
     int drift_table = 0;
     app.add_option("--drift-table", drift_table,
                    "Drift-velocity closure: write the drift sums of the grid of N cells across (cgd-filter --grids) as a "
-                   "drift table H(phi, cell slip) (curves = drift_table), used with fluid.drag = \"drift\" (docs/fit.md)")
+                   "drift table H(phi, cell slip) (curves = drift_table), used with fluid.drag = \"drift\" (docs/closure.md \"The drift-velocity closure\")")
         ->type_name("N");
     double drift_min_alignment = 0.25;
     app.add_option("--drift-min-alignment", drift_min_alignment,

@@ -320,7 +320,7 @@ TEST(CoarseGridOperator, UniformFieldsOnAUniformLatticeGiveTheResolvedSlipAndHZe
 }
 
 
-// ---- the drift-velocity closure's sums (cgd-filter --grids; docs/filter.md "The drift table's sums") ---------
+// ---- the drift-velocity closure's sums (cgd-filter --grids; docs/closure.md "The drift-velocity closure") ---------
 
 /// Every cell's TSC weight of a point x on the periodic grid g, dense (file order), from bspline2 and the periodic
 /// images: independent of core/tsc_kernel.hpp and core/tsc_grid.hpp.
