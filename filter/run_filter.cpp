@@ -678,6 +678,16 @@ std::size_t run_filter(const FilterOptions& o, MPI_Comm comm) {
                         << std::sqrt(6.0) << "), " << e.bins << " bins, rms H mismatch " << e.rms << "\n";
             else
               std::cout << "not determined (no bin with >= 100 samples at the grid and every width)\n";
+            if (n_slip > 0) {  // the drift sums of this grid: how many (phi, slip) bins a drift table could use
+              const std::size_t cells = n_bins * n_slip;
+              std::vector<double> count(cells, 0.0);
+              for (std::size_t k = 0; k < rows; ++k)
+                for (std::size_t c = 0; c < cells; ++c) count[c] += drift[k * drift_per_row + (g * cells + c) * kDriftFields];
+              const auto full = std::count_if(count.begin(), count.end(), [](double x) { return x >= 100; });
+              std::cout << "  drift sums: " << full << " (phi_bar, cell slip) bins with >= 100 samples (slip bins of "
+                        << plan.slip_edges[1] << " u_t up to " << plan.slip_edges.back() << " u_t), "
+                        << drift_out_of_range[g] << " samples beyond them\n";
+            }
             std::cout << "  phi_bar   count     H_grid   [95 % interval]\n";
             const std::size_t col = whole_col + 1 + g;
             for (std::size_t b = 0; b < n_bins; ++b) {
