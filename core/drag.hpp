@@ -27,12 +27,29 @@
 // the rows is the order the laws are offered in messages; the first is the scene's default.
 // Adding a microscopic law (docs/howto.md "A new drag law"): its evaluator struct below, one row here,
 // and its rows in docs/models.md and docs/scene-keys.md (tests/unit/test_drag.cpp checks the docs).
+//
+// The filtered law "drift" (issue 28; docs/closure.md "The drift-velocity closure", docs/models.md "Filtered
+// drag models") is the drift-velocity (two-marker) closure, evaluated by DriftDrag (core/filtered_drag.hpp) and
+// applied by the coupler (sim/coupling/coupler.hpp). Per particle (or parcel) i of a coarse run, with the TSC
+// weights w_ic of its grid:
+//   vbar_c = sum_i V_i w_ic v_i / sum_i V_i w_ic   (the cell's mean particle velocity; a cell with no deposit: u_c),
+//   vbar_i = sum_c w_ic vbar_c,   s~_i = u~_i - vbar_i (the cell slip),   s^_i = |s~_i| / u_t,
+//   F_i = V_i beta_micro(phi_i, |u~_i - v_i|) [ (u~_i - v_i) - H(phi_i, s^_i) s~_i ],
+// so the cell-mean part of the slip gets the reduced drag (1 - H) beta_micro and the particle's deviation from its
+// cell's mean, vbar_i - v_i, the full micro drag (parcel fluctuations stay damped). H(phi, s^) is the table of a
+// model file with curves = "drift_table" (cgd-fit --drift-table N): bilinear on its bin centres, held constant
+// outside, clamped to [-1, h_max]. The sub-grid drift form of Parmentier, Simonin & Delsart (2012, AIChE J.
+// 58:1084) and Ozel, Gu, Milioli, Kolehmainen & Sundaresan (2017, Phys. Fluids 29:103308), with the
+// filtered slip as the second marker of Milioli, Milioli, Holloway, Agrawal & Sundaresan (2013, AIChE J.
+// 59:3265), who found the filtered drag correction growing with the slip.
 #define CGD_DRAG_LAWS(X)                                                                                \
   X(Beetstra, "beetstra", Micro, BeetstraDrag, "Beetstra, van der Hoef & Kuipers (2007)")               \
   X(WenYu, "wen-yu", Micro, WenYuDrag, "Wen & Yu (1966)")                                               \
   X(Stokes, "stokes", Micro, StokesDrag, "Stokes drag on a single sphere")                              \
   X(Radl2014, "radl2014", Filtered, void, "Radl & Sundaresan (2014), the published master curves")      \
-  X(Model, "model", Filtered, void, "a model file written by cgd-fit (fluid.drag_model = PATH)")
+  X(Model, "model", Filtered, void, "a model file written by cgd-fit (fluid.drag_model = PATH)")        \
+  X(Drift, "drift", Filtered, void,                                                                     \
+    "the drift-velocity closure H(phi, cell slip): a drift table of cgd-fit --drift-table (fluid.drag_model = PATH)")
 
 namespace cgd {
 
@@ -202,7 +219,7 @@ struct BeetstraDrag {
 };
 
 /// The microscopic law of a name as files and scenes spell it (a row of kind Micro in CGD_DRAG_LAWS);
-/// nullopt for any other name, the filtered laws ("radl2014", "model") included.
+/// nullopt for any other name, the filtered laws ("radl2014", "model", "drift") included.
 std::optional<DragLaw> microscopic_drag_law(std::string_view name);
 
 /// Throws InputError: `law` (kind Filtered) is a filtered model, which needs a model file and
@@ -233,7 +250,7 @@ decltype(auto) visit_drag_law(DragLaw law, const DragParams& params, Visitor&& v
 }
 
 /// beta_p of `law` (kg m^-3 s^-1) chosen at run time, for code that is not hot. Throws InputError
-/// for DragLaw::Radl2014 and DragLaw::Model ("needs a filtered model file").
+/// for the filtered laws (DragLaw::Radl2014, Model, Drift: "needs a filtered model file").
 double beta_p(DragLaw law, const DragParams& params, double phi, double slip_speed);
 
 namespace detail {

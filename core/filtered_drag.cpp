@@ -10,6 +10,7 @@
 #include <cmath>
 #include <cstdio>
 #include <iterator>
+#include <utility>
 
 #include "core/error.hpp"
 #include "core/schema/drag_model.hpp"
@@ -116,6 +117,28 @@ double BSpline::operator()(double x) const {
   return d[p];
 }
 
+namespace {
+/// The interval [i, i + 1] of the ascending `x` holding v (clamped into the ends) and the weight of i + 1; one point:
+/// (0, 0).
+std::pair<std::size_t, double> bracket(const std::vector<double>& x, double v) {
+  const std::size_t n = x.size();
+  if (n < 2 || !(v > x.front())) return {0, 0.0};  // below the first (or NaN): the first value
+  if (!(v < x.back())) return {n - 2, 1.0};
+  const std::size_t i = static_cast<std::size_t>(std::upper_bound(x.begin(), x.end(), v) - x.begin()) - 1;
+  return {i, (v - x[i]) / (x[i + 1] - x[i])};
+}
+}  // namespace
+
+double DriftTable::operator()(double phi_value, double slip_over_ut) const {
+  const auto [i, a] = bracket(phi, phi_value);
+  const auto [j, b] = bracket(slip, slip_over_ut);
+  const std::size_t ns = slip.size();
+  const std::size_t i1 = phi.size() > 1 ? i + 1 : i, j1 = ns > 1 ? j + 1 : j;
+  const double lo = (1.0 - b) * H[i * ns + j] + b * H[i * ns + j1];
+  const double hi = (1.0 - b) * H[i1 * ns + j] + b * H[i1 * ns + j1];
+  return std::clamp((1.0 - a) * lo + a * hi, -1.0, h_max);
+}
+
 double SplineCurves::h(double phi) const {
   const DragModel& m = *model;
   if (m.table) return std::clamp(m.h_spline(phi), -1.0, m.h_max);  // the spline clamps phi to its ends
@@ -132,14 +155,13 @@ double SplineCurves::a(double phi) const {
 
 FilteredDragSetup filtered_drag_setup(const Scene& scene, const Vec3& cell_spacing_m) {
   FilteredDragSetup setup;
-  if (!scene.fluid || (scene.fluid->drag != DragLaw::Radl2014 && scene.fluid->drag != DragLaw::Model))
-    return setup;
+  if (!scene.fluid || is_microscopic(scene.fluid->drag)) return setup;
   setup.filter_width_m =
       scene.fluid->filter_to_grid_ratio * std::cbrt(cell_spacing_m[0] * cell_spacing_m[1] * cell_spacing_m[2]);
   setup.l_char_m = scene.derived.l_char_m;
   setup.parcel_size = scene.particles.parcel_size;
   setup.parcel_correction = scene.fluid->parcel_correction;
-  if (scene.fluid->drag == DragLaw::Model && scene.fluid->drag_model) {
+  if ((scene.fluid->drag == DragLaw::Model || scene.fluid->drag == DragLaw::Drift) && scene.fluid->drag_model) {
     // read and checked against the scene by load_scene: nothing is read here
     setup.model = scene.fluid->drag_model;
     setup.warnings = model_calibration_warnings(*setup.model, setup.filter_width_m);
@@ -166,9 +188,10 @@ std::vector<std::string> model_calibration_warnings(const DragModel& m, double d
   }
   if (m.calibrated_delta_m.empty()) return out;
   const auto [lo, hi] = std::minmax_element(m.calibrated_delta_m.begin(), m.calibrated_delta_m.end());
-  if (m.table) {
+  if (m.table || m.drift) {
     if (std::abs(delta_m - *lo) > 1e-6 * *lo)
-      out.push_back(m.path + " is the a-priori H_grid table of the grid of " + std::to_string(m.table_cells_across) +
+      out.push_back(m.path + (m.drift ? " is the drift table H(phi, cell slip)" : " is the a-priori H_grid table") +
+                    " of the grid of " + std::to_string(m.table_cells_across) +
                     " cells across (cell " + number(*lo / d) + " d_p), but this run's Delta (its cell times fluid.filter_to_grid_ratio) is " + number(delta_m / d) +
                     " d_p: the table is applied unchanged (it has no width dependence)");
   } else if (delta_m < *lo * (1 - 1e-6) || delta_m > *hi * (1 + 1e-6)) {
@@ -180,10 +203,20 @@ std::vector<std::string> model_calibration_warnings(const DragModel& m, double d
 }
 
 void check_filtered_setup(DragLaw law, const FilteredDragSetup& setup) {
-  if (law != DragLaw::Radl2014 && law != DragLaw::Model) return;
+  if (is_microscopic(law)) return;
   const std::string name = std::string("drag law \"") + to_string(law) + "\"";
   if (law == DragLaw::Model && !setup.model)
     throw InputError(name + " needs a model file (fluid.drag_model = \"PATH\" or --model PATH)");
+  if (law == DragLaw::Drift && !setup.model)
+    throw InputError(name + " needs a drift table (fluid.drag_model = \"PATH\" of cgd-fit --drift-table N)");
+  if (law == DragLaw::Model && setup.model->drift)
+    throw InputError(name + ": " + setup.model->path + " is a drift table (curves = \"drift_table\"), used with "
+                     "fluid.drag = \"drift\"; \"model\" takes splines or a --grid-table table");
+  if (law == DragLaw::Drift && !setup.model->drift)
+    throw InputError(name + ": " + setup.model->path + " is not a drift table (curves = \"drift_table\" of cgd-fit "
+                     "--drift-table N); a model of h(phi), a(phi) or a --grid-table table is used with fluid.drag = \"model\"");
+  if (law == DragLaw::Drift && !(setup.model->u_t_m_s > 0))
+    throw InputError(name + ": " + setup.model->path + " has no terminal velocity u_t > 0 (the drift table's slip unit)");
   if (!(setup.filter_width_m > 0.0))
     throw InputError(name + " needs the filter width Delta > 0 (cube root of the fluid cell volume), got " +
                      number(setup.filter_width_m));
@@ -231,6 +264,9 @@ DragModel load_drag_model(const std::string& path) {
   m.calibrated_delta_m = file.calibrated_delta_m;
   m.table = file.curves == schema::ModelCurves::Table;
   m.table_cells_across = file.table_cells_across;
+  m.drift = file.curves == schema::ModelCurves::DriftTable;
+  if (m.drift && file.drift_table)
+    m.drift_table = DriftTable{file.drift_table->phi, file.drift_table->slip, file.drift_table->H, file.h_max};
   m.code_version = file.code_version;
   m.created = file.created;
   m.calibrated_cells_across = file.calibrated_cells_across;

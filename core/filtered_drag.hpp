@@ -73,6 +73,20 @@ struct BSpline {
   double upper() const { return knots[coefficients.size()]; }
 };
 
+/// The table of the drift-velocity closure (DragLaw::Drift; a model file with curves = "drift_table", written by
+/// cgd-fit --drift-table N; docs/schema-drag-model.md "/drift_table"): H on the bin centres phi_k (filtered solids
+/// fraction) and s_m (the cell slip |u~ - vbar| in units of u_t), row-major (n_phi, n_slip). Evaluated bilinearly,
+/// held constant outside the table (phi and s clamped to its ends), the result clamped to [-1, h_max] as the
+/// --grid-table table is.
+struct DriftTable {
+  std::vector<double> phi;   // ascending, at least one
+  std::vector<double> slip;  // ascending, at least one, in u_t
+  std::vector<double> H;     // phi.size() x slip.size(), row-major
+  double h_max = 0.99;
+  /// H(phi, s_hat): bilinear in (phi, s_hat) between the bin centres, constant beyond the ends, clamped.
+  double operator()(double phi_value, double slip_over_ut) const;
+};
+
 /// A drag model file (cgd_format = "drag_model", docs/schema-drag-model.md) as read by
 /// load_drag_model: what the evaluator needs and what a run checks against its own scene. It extends
 /// the physical system it was made for (core/physical_system.hpp: d, densities, viscosity, |g|, u_t,
@@ -101,7 +115,12 @@ struct DragModel : PhysicalSystem {
   // (the order-2 B-spline /h through (phi_k, H_k)), held constant outside it, clamped to [-1, h_max], with
   // no phi_crit rule, and a = 0: the correction is 1 - H_grid(phi) at any Delta (meant for grid N's Delta).
   bool table = false;
-  std::int64_t table_cells_across = 0;
+  std::int64_t table_cells_across = 0;  // the grid of a table or drift table (cells across x)
+  // curves = "drift_table" (cgd-fit --drift-table N): the drift-velocity closure's H(phi, cell slip) of one grid, for
+  // fluid.drag = "drift" only (DriftDrag); h_spline then holds the phi-only H_grid of the same grid (the table's
+  // fallback rows), not used by the law. fluid.drag = "model" refuses such a file, and "drift" any other.
+  bool drift = false;
+  DriftTable drift_table;
 
   // Read for cgd-export, not used by the law: where the file came from and the 95 % bands of H.
   std::string code_version, created;
@@ -156,10 +175,40 @@ struct FilteredDrag {
   }
 };
 
+/// The drift-velocity closure (DragLaw::Drift; the equation, its sources and its use by the coupler: core/drag.hpp
+/// above the law table, sim/coupling/coupler.hpp). beta_p is the micro law's coefficient at the particle's own slip
+/// |u~_i - v_i|, which multiplies the whole force F_i = V_i beta_p [(u~_i - v_i) - H s~_i]; cell_slip_correction
+/// is H(phi_i, |s~_i| / u_t) of the model's drift table. In a uniform suspension (every particle moving with its
+/// cell's mean, s~_i = u~_i - v_i) the force is (1 - H) beta_p (u~_i - v_i): the phi-only table law with that H.
+/// c_corr(alpha) does not enter (the table is the grid's closure alone, as a --grid-table table).
+template <class Micro>
+struct DriftDrag {
+  using Params = DragParams;
+  Params params;
+  Micro micro;
+  const DriftTable* table = nullptr;
+  double inv_u_t = 0;  // 1 / u_t (docs/models.md convention: the Schiller-Naumann u_t of the model = the run's)
+
+  DriftDrag(const Micro& base, const DriftTable* t, double u_t)
+      : params(base.params), micro(base), table(t), inv_u_t(1.0 / u_t) {}
+
+  double reynolds(double phi, double slip_speed) const { return micro.reynolds(phi, slip_speed); }
+  /// The micro law's beta_p at the particle's own slip (relaxes the whole slip; the H part is subtracted).
+  double beta_p(double phi, double slip_speed) const { return micro.beta_p(phi, slip_speed); }
+  /// H(phi, |s~| / u_t), the correction of the cell-mean part s~ of the slip, |s~| = cell_slip_speed in m/s.
+  double cell_slip_correction(double phi, double cell_slip_speed) const {
+    return (*table)(phi, cell_slip_speed * inv_u_t);
+  }
+};
+
+/// True for the drift-velocity law's evaluator (the coupler's cell-slip path).
+template <class Law>
+inline constexpr bool is_drift_drag = requires(const Law& law) { law.cell_slip_correction(0.0, 0.0); };
+
 /// What a filtered law needs besides DragParams, fixed for a run: the model file (for
-/// DragLaw::Model), the filter width Delta and L_char that give F, and the parcel size alpha.
+/// DragLaw::Model and DragLaw::Drift), the filter width Delta and L_char that give F, and the parcel size alpha.
 struct FilteredDragSetup {
-  std::shared_ptr<const DragModel> model;  // required for DragLaw::Model
+  std::shared_ptr<const DragModel> model;  // required for DragLaw::Model (splines or table) and Drift (drift table)
   double filter_width_m = 0;               // Delta: fluid.filter_to_grid_ratio x cube root of the cell volume
   double l_char_m = 0;                     // L_char of the run (docs/models.md convention)
   double parcel_size = 1;                  // alpha
@@ -176,12 +225,12 @@ struct FilteredDragSetup {
 /// empty setup. InputError (check_filtered_setup) when the setup is incomplete.
 FilteredDragSetup filtered_drag_setup(const Scene& scene, const Vec3& cell_spacing_m);
 
-/// InputError unless `setup` is complete for `law` (model present for Model, Delta, L_char > 0,
-/// alpha >= 1). Micro laws need nothing.
+/// InputError unless `setup` is complete for `law` (model present for Model and Drift, a drift table for Drift and
+/// none for Model, Delta, L_char > 0, alpha >= 1). Micro laws need nothing.
 void check_filtered_setup(DragLaw law, const FilteredDragSetup& setup);
 
 /// Like visit_drag_law, for every law including the filtered ones: chooses the evaluator once and
-/// calls visit(evaluator). For Radl2014 the base law is Beetstra (the published model's) and c_corr
+/// calls visit(evaluator). For Drift, DriftDrag of the model's micro law and drift table. For Radl2014 the base law is Beetstra (the published model's) and c_corr
 /// uses the paper's a_c = 0, k_c = 0.05; for Model, the file's base law, L_char and c_corr. F is
 /// setup.l_char_m / setup.filter_width_m for Radl2014 and model->l_char_m / filter_width_m for Model
 /// (the model's L_char equals the run's when check_model_matches_scene passed), raised to the file's
@@ -205,6 +254,13 @@ decltype(auto) visit_any_drag_law(DragLaw law, const DragParams& params, const F
     const SplineCurves curves{&m};
     return visit_drag_law(m.micro_drag, params, [&](const auto& micro) {
       return visit(FilteredDrag<std::decay_t<decltype(micro)>, SplineCurves>(micro, curves, F_to_n, corr));
+    });
+  }
+  if (law == DragLaw::Drift) {
+    check_filtered_setup(law, setup);
+    const DragModel& m = *setup.model;
+    return visit_drag_law(m.micro_drag, params, [&](const auto& micro) {
+      return visit(DriftDrag<std::decay_t<decltype(micro)>>(micro, &m.drift_table, m.u_t_m_s));
     });
   }
   return visit_drag_law(law, params, std::forward<Visitor>(visit));

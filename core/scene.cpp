@@ -196,11 +196,13 @@ std::optional<FluidConfig> read_fluid(const SceneReader& in, const ToolAccepts& 
     }
     if (auto v = in.string("fluid", "drag_model")) f.drag_model_path = *v;
     if (auto v = in.string("fluid", "drag_model_checksum")) f.drag_model_checksum = *v;
-    if (f.drag == DragLaw::Model && f.drag_model_path.empty())
-      in.fail_missing("fluid", "drag_model", " with fluid.drag = \"model\"");
-    if (f.drag != DragLaw::Model && !f.drag_model_path.empty())
-      in.fail_value("fluid", "drag_model", std::string("is only used with fluid.drag = \"model\" (the scene has \"") +
-                                               to_string(f.drag) + "\"); remove it or set fluid.drag = \"model\"");
+    const bool takes_model = f.drag == DragLaw::Model || f.drag == DragLaw::Drift;
+    if (takes_model && f.drag_model_path.empty())
+      in.fail_missing("fluid", "drag_model", std::string(" with fluid.drag = \"") + to_string(f.drag) + "\"");
+    if (!takes_model && !f.drag_model_path.empty())
+      in.fail_value("fluid", "drag_model",
+                    std::string("is only used with fluid.drag = \"model\" or \"drift\" (the scene has \"") +
+                        to_string(f.drag) + "\"); remove it or set fluid.drag = \"model\" (or \"drift\" for a drift table)");
     if (!f.drag_model_path.empty()) {
       std::error_code ec;
       if (!std::filesystem::is_regular_file(f.drag_model_path, ec))
@@ -215,6 +217,18 @@ std::optional<FluidConfig> read_fluid(const SceneReader& in, const ToolAccepts& 
         in.fail_value("fluid", "drag_model_checksum",
                       "differs from the checksum of " + f.drag_model_path + " (" + sum +
                           "): the model file has changed since this scene recorded it");
+      // the file's kind must be the law's: a drift table (curves = "drift_table") only with "drift", any other
+      // model only with "model"
+      if (f.drag == DragLaw::Model && model->drift)
+        in.fail_value("fluid", "drag_model",
+                      "is a drift table (curves = \"drift_table\", cgd-fit --drift-table N), the drift-velocity closure's "
+                      "H(phi, cell slip): allowed with fluid.drag = \"drift\"; fluid.drag = \"model\" takes a model of "
+                      "h(phi), a(phi) (cgd-fit) or a --grid-table table");
+      if (f.drag == DragLaw::Drift && !model->drift)
+        in.fail_value("fluid", "drag_model",
+                      std::string("is a model of curves = \"") + (model->table ? "table" : "splines") +
+                          "\" (a phi-only correction): fluid.drag = \"drift\" takes a drift table (curves = \"drift_table\", "
+                          "cgd-fit --drift-table N); use this file with fluid.drag = \"model\"");
       f.drag_model_checksum = sum;
       f.drag_model = std::move(model);
     }

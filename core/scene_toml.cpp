@@ -43,7 +43,7 @@ const std::vector<SectionSpec>& schema() {
         {"courant", Kind::Number, "Courant number of the fluid step"},
         {"coupling", Kind::String, "fluid-particle coupling"},
         {"drag", Kind::String, "microscopic drag law"},
-        {"drag_model", Kind::String, "path of the drag model file (cgd-fit) used by drag = \"model\""},
+        {"drag_model", Kind::String, "path of the drag model file (cgd-fit) used by drag = \"model\" (or of the drift table of cgd-fit --drift-table, used by drag = \"drift\")"},
         {"drag_model_checksum", Kind::String, "FNV-1a checksum of fluid.drag_model (recorded by cgd)"},
         {"pressure_gradient_force", Kind::Boolean, "apply -V_p grad p to the particles"},
         {"parcel_correction", Kind::Boolean,

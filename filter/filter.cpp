@@ -147,6 +147,24 @@ std::vector<double> coarse_grid_fields(const schema::Snapshot& s, const CoarseGr
   return out;
 }
 
+std::vector<double> coarse_cell_mean_velocity(const schema::Snapshot& s, const CoarseGrid& coarse,
+                                              const std::vector<double>& fields) {
+  const PeriodicGrid& G = coarse.grid;
+  const std::size_t n = G.cell_count();
+  std::vector<double> mass(n, 0.0), mv(3 * n, 0.0);
+  for (std::int64_t i = 0; i < s.count; ++i) {
+    const double* v = &s.velocity[3 * i];
+    for_each_tsc_cell(G, &s.position[3 * i], [&](std::size_t c, double w) {
+      mass[c] += w;
+      for (int d = 0; d < 3; ++d) mv[3 * c + d] += w * v[d];
+    });
+  }
+  std::vector<double> out(3 * n);
+  for (std::size_t c = 0; c < n; ++c)
+    for (int d = 0; d < 3; ++d) out[3 * c + d] = mass[c] > 0 ? mv[3 * c + d] / mass[c] : fields[7 * c + 1 + d];
+  return out;
+}
+
 std::vector<double> default_widths_m(const PeriodicGrid& grid, double shortest_edge_m) {
   std::vector<double> w;
   const double h = grid.cell_size_m();
@@ -164,6 +182,11 @@ FilterPlan plan_filter(const FilterOptions& o) {
   if (!(o.bin_max > o.bin_width && o.bin_max <= 1.0))
     throw InputError("--bins: upper end " + fmt(o.bin_max) + " is not allowed (bin width < upper end <= 1)");
   if (o.from_time_s && o.from_tref) throw InputError("--from-time and --from-tref are alternatives: give one");
+  if (!(o.slip_bin_width > 0 && o.slip_bin_width <= 10))
+    throw InputError("--slip-bins: bin width " + fmt(o.slip_bin_width) + " u_t is not allowed (0 < width <= 10)");
+  if (!(o.slip_bin_max > o.slip_bin_width && o.slip_bin_max <= 100 && o.slip_bin_max / o.slip_bin_width <= 1000))
+    throw InputError("--slip-bins: upper end " + fmt(o.slip_bin_max) +
+                     " u_t is not allowed (bin width < upper end <= 100 u_t, at most 1000 bins)");
   if (o.samples < 0) throw InputError("--samples: " + std::to_string(o.samples) + " is not allowed (>= 0)");
   if (o.bootstrap_replicates < 20)
     throw InputError("--bootstrap: " + std::to_string(o.bootstrap_replicates) +
@@ -264,6 +287,13 @@ FilterPlan plan_filter(const FilterOptions& o) {
   plan.whole_box_width_m = std::cbrt(r0.physics.box_size_m[0] * r0.physics.box_size_m[1] * r0.physics.box_size_m[2]);
   const int n_bins = static_cast<int>(std::llround(o.bin_max / o.bin_width));
   for (int b = 0; b <= n_bins; ++b) plan.bin_edges.push_back(b * o.bin_width);
+  if (!plan.grids.empty()) {  // the drift table's slip bins, in u_t
+    const int n_slip = static_cast<int>(std::llround(o.slip_bin_max / o.slip_bin_width));
+    for (int m = 0; m <= n_slip; ++m) plan.slip_edges.push_back(m * o.slip_bin_width);
+    if (!(r0.physics.u_t_m_s > 0))
+      throw InputError(r0.path + ": the run has no terminal velocity u_t > 0 (a fluid and gravity): the drift sums "
+                       "of --grids bin the cell slip in u_t");
+  }
   return plan;
 }
 
@@ -285,12 +315,20 @@ SnapshotResult filter_snapshot(const schema::Snapshot& s, const FilterPlan& plan
   out.out_of_range.assign(n_widths, 0);
   out.samples.assign(n_widths, {});
   out.particles = s.count;
+  const std::size_t n_slip = plan.slip_bins();
+  out.drift.assign(plan.grids.size() * n_bins * n_slip, DriftSums{});
+  out.drift_out_of_range.assign(plan.grids.size(), 0);
+  const double slip_bin_width = n_slip > 0 ? plan.slip_edges[1] - plan.slip_edges[0] : 1.0;
+  const double inv_u_t = 1.0 / run.physics.u_t_m_s;
   const PeriodicBoxFilter box(s.grid, s.void_fraction, s.eps_velocity, s.pressure,
                               plan.widths_m.empty() ? s.grid.cell_size_m() : plan.widths_m.back());
   // the coarse grids' fields (phi, u, grad p per coarse cell), interpolated to the particles below
   std::vector<std::vector<double>> coarse(plan.grids.size());
   const double particle_volume = std::numbers::pi / 6.0 * std::pow(run.physics.diameter_m * run.physics.parcel_size, 3);
   for (std::size_t g = 0; g < plan.grids.size(); ++g) coarse[g] = coarse_grid_fields(s, run.coarse[g], particle_volume);
+  // the grids' cell-mean particle velocities (the drift sums)
+  std::vector<std::vector<double>> vbar(plan.grids.size());
+  for (std::size_t g = 0; g < plan.grids.size(); ++g) vbar[g] = coarse_cell_mean_velocity(s, run.coarse[g], coarse[g]);
   const FilteredPoint whole = box.domain_average();
   const bool pressure_terms = run.physics.pressure_gradient_force;
   // max-heaps of the smallest keys per width: the random subsample
@@ -341,6 +379,26 @@ SnapshotResult filter_snapshot(const schema::Snapshot& s, const FilterPlan& plan
           bs.micro += beta_micro * slip[1];
           bs.slip += slip[1];
           bs.phi += phi;
+          if (w > whole_col && n_slip > 0) {  // a grid: the drift sums, binned in phi~ and the cell slip
+            const std::size_t g = w - whole_col - 1;
+            const std::array<double, 3> vb = tsc_interpolate<3>(run.coarse[g].grid, vbar[g].data(), x);
+            const double cell[3] = {f.velocity[0] - vb[0], f.velocity[1] - vb[1], f.velocity[2] - vb[2]};
+            const double cell_speed = std::sqrt(cell[0] * cell[0] + cell[1] * cell[1] + cell[2] * cell[2]);
+            const double shat = cell_speed * inv_u_t;
+            const double m_real = std::floor(shat / slip_bin_width);
+            if (!(m_real >= 0 && m_real < static_cast<double>(n_slip))) {
+              ++out.drift_out_of_range[g];
+            } else {
+              DriftSums& ds = out.drift[(g * n_bins + static_cast<std::size_t>(b_real)) * n_slip +
+                                        static_cast<std::size_t>(m_real)];
+              ds.count += 1;
+              ds.numerator += beta_micro * slip[1] - numerator;
+              ds.denominator += beta_micro * cell[1];
+              ds.magnitude += beta_micro * cell_speed;
+              ds.phi += phi;
+              ds.slip += shat;
+            }
+          }
         }
         if (o.samples > 0) {
           Sample smp;

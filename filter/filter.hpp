@@ -15,6 +15,15 @@
 //   beta_bar = sum N_i / sum s_i,y   (a ratio of sums, never a mean of ratios: s_i,y -> 0 is harmless)
 //   H        = 1 - sum N_i / sum M_i   (how a coarse run uses it: beta_bar = (1 - H) beta_micro)
 // and a 95 % interval of H from a block bootstrap over snapshots (see statistics.hpp).
+//
+// The drift-velocity closure's sums (issue 28; docs/closure.md "The drift-velocity closure"), per coarse grid (--grids)
+// and per (phi_tilde, s_hat) bin: vbar_c = sum_i w_ic v_i / sum_i w_ic, the TSC deposit of the snapshot's particle
+// velocities on the grid (equal volumes: V cancels; a cell with no deposit: u_C, zero slip), interpolated back,
+// vbar_i = sum_c w_ic vbar_c; the cell slip s~_i = u~_i - vbar_i, s_hat_i = |s~_i| / u_t; with the grid's M_i and N_i
+// above (M_i = beta_micro(phi~_i, |u~_i - v_i|) (u~_i - v_i)_y, N_i the resolved drag with the sub-grid pressure part),
+//   numerator   = sum_i (M_i - N_i),   denominator = sum_i beta_micro,i s~_i,y,   magnitude = sum_i beta_micro,i |s~_i|,
+// so that the closure F_i = V beta_micro [(u~_i - v_i) - H s~_i] reproduces each bin's total drag when
+// H = numerator / denominator (with v_i = vbar_i it is H_grid).
 #include <cstdint>
 #include <optional>
 #include <string>
@@ -33,6 +42,8 @@ struct FilterOptions {
   std::vector<int> grids_cells_across;         // --grids: coarse grids, cells across the box's x edge
   double bin_width = 0.01;                     // phi_bar bins
   double bin_max = 0.65;                       // bins cover [0, bin_max)
+  double slip_bin_width = 0.1;                 // --slip-bins: s_hat = |cell slip| / u_t bins of the drift sums (grids)
+  double slip_bin_max = 3.0;                   // they cover [0, slip_bin_max)
   std::optional<double> from_time_s, from_tref;  // drop snapshots before this time
   std::int64_t samples = 0;                    // per-particle records kept per width (0: none)
   int bootstrap_replicates = 1000;
@@ -71,7 +82,9 @@ struct FilterPlan {
   std::vector<int> grids;                      // coarse grids (cells across x), ascending cell size
   double whole_box_width_m = 0;                // cube root of the (first run's) box volume
   std::vector<double> bin_edges;
+  std::vector<double> slip_edges;              // s_hat bins of the drift sums (with grids; empty without)
   std::vector<std::string> warnings;
+  std::size_t slip_bins() const { return slip_edges.empty() ? 0 : slip_edges.size() - 1; }
   std::size_t snapshot_count() const;
   /// Result columns: the widths, the whole box (index widths_m.size()), then the grids.
   std::size_t columns() const { return widths_m.size() + 1 + grids.size(); }
@@ -90,6 +103,13 @@ CoarseGrid coarse_grid_of_scene(const std::string& scene_toml, const std::string
 /// pressure (3). `fine` is the box filter of (eps, eps u_c, p) of the snapshot.
 std::vector<double> coarse_grid_fields(const schema::Snapshot& snapshot, const CoarseGrid& coarse, double particle_volume_m3);
 
+/// The drift sums' cell-mean particle velocity on a coarse grid, 3 per cell (file order): vbar_c = sum_i w_ic v_i /
+/// sum_i w_ic, the TSC deposit of the snapshot's particles in their snapshot order (every particle of a snapshot has
+/// the same volume, which cancels); a cell with no deposit gets the grid's fluid velocity u_C of `fields` (the 7 per
+/// cell of coarse_grid_fields): zero cell slip there.
+std::vector<double> coarse_cell_mean_velocity(const schema::Snapshot& snapshot, const CoarseGrid& coarse,
+                                              const std::vector<double>& fields);
+
 /// Default widths: the multiples k of the cell size h (cube root of the cell volume) with
 /// 3 k h <= the shortest box edge of every run.
 std::vector<double> default_widths_m(const PeriodicGrid& grid, double shortest_edge_m);
@@ -102,6 +122,11 @@ FilterPlan plan_filter(const FilterOptions& options);
 /// Per-snapshot sums of one (width, bin): count, sum N, sum M, sum s_y, sum phi_bar.
 struct BinSums {
   double count = 0, numerator = 0, micro = 0, slip = 0, phi = 0;
+};
+
+/// Per-snapshot sums of one (grid, phi bin, s_hat bin) of the drift table (see the top of this file).
+struct DriftSums {
+  double count = 0, numerator = 0, denominator = 0, magnitude = 0, phi = 0, slip = 0;  // slip: sum of s_hat
 };
 
 /// A per-particle record (--samples).
@@ -119,6 +144,10 @@ struct SnapshotResult {
   std::vector<BinSums> sums;
   std::vector<std::int64_t> out_of_range;
   std::vector<std::vector<Sample>> samples;    // per width (incl. whole box), at most options.samples
+  // drift sums: drift[(g * n_bins + b) * n_slip + m] for grid g, phi bin b, s_hat bin m; samples whose phi is in
+  // the bins but s_hat beyond the slip bins in drift_out_of_range[g]
+  std::vector<DriftSums> drift;
+  std::vector<std::int64_t> drift_out_of_range;
   double seconds = 0;                          // wall time of the filtering (without reading)
   std::int64_t particles = 0;
 };

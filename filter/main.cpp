@@ -47,6 +47,10 @@ int main(int argc, char** argv) {
                    "comma-separated: the filtered drag correction H_grid of the coarse grid's own operator (TSC deposit "
                    "and interpolation, docs/filter.md) beside the box widths");
     app.add_option("--bins", bins, "phi_bar bins: WIDTH or WIDTH,MAX (default 0.01,0.65: [0, 0.65) in steps of 0.01)");
+    std::string slip_bins;
+    app.add_option("--slip-bins", slip_bins,
+                   "bins of the cell slip |u~ - vbar| / u_t of the drift-velocity closure's sums (with --grids; "
+                   "docs/closure.md): WIDTH or WIDTH,MAX (default 0.1,3: [0, 3) u_t in steps of 0.1)");
     app.add_option("--from-time", from_time, "drop snapshots before this time (s)");
     app.add_option("--from-tref", from_tref, "drop snapshots before this time (units of t_ref = u_t/g)");
     app.add_option("--samples", o.samples, "also store N random per-particle records per width");
@@ -67,6 +71,12 @@ int main(int argc, char** argv) {
       if (b.size() > 2) throw cgd::InputError("--bins: give WIDTH or WIDTH,MAX, not " + bins);
       o.bin_width = b[0];
       if (b.size() == 2) o.bin_max = b[1];
+    }
+    if (!slip_bins.empty()) {
+      const std::vector<double> b = parse_list(slip_bins, "--slip-bins");
+      if (b.size() > 2) throw cgd::InputError("--slip-bins: give WIDTH or WIDTH,MAX, not " + slip_bins);
+      o.slip_bin_width = b[0];
+      if (b.size() == 2) o.slip_bin_max = b[1];
     }
     if (app.count("--from-time")) o.from_time_s = from_time;
     if (app.count("--from-tref")) o.from_tref = from_tref;

@@ -40,6 +40,7 @@ std::string rounded_duration(double s) {
 }
 
 constexpr int kSumFields = 5;  // count, numerator, micro, slip, phi
+constexpr int kDriftFields = 6;  // the drift sums: count, numerator, denominator, magnitude, phi, slip (DriftSums)
 
 /// An error on some ranks only must end the job on all of them (no rank left waiting in a
 /// collective): every rank reports its status, and all throw the first failing rank's message.
@@ -324,11 +325,106 @@ schema::FilteredGroup::Grid grid_attributes(const CoarseGrid& c, const Equivalen
   return g;
 }
 
+/// The drift sums of every grid (`drift/` of /grids/<N>): totals over the snapshots in row order, H = numerator /
+/// denominator, and its bootstrap standard deviation over the snapshot blocks of `st` (each replicate draws, within
+/// each run, as many blocks as it has, with replacement; a seed of its own derived from --seed).
+std::vector<schema::FilteredGroup::Drift> drift_groups(const FilterPlan& plan, const FilterOptions& o,
+                                                       const std::vector<double>& drift, const Statistics& st,
+                                                       const std::vector<std::int64_t>& drift_out_of_range) {
+  const std::size_t n_grids = plan.grids.size(), n_bins = plan.bin_edges.size() - 1, n_slip = plan.slip_bins();
+  const std::size_t cells = n_bins * n_slip, per_row = n_grids * cells * kDriftFields;
+  const std::size_t rows = plan.snapshot_count();
+  std::vector<schema::FilteredGroup::Drift> out(n_grids);
+  if (n_slip == 0) return out;
+  std::size_t n_blocks = 0;
+  for (std::int64_t b : st.block_of_row) n_blocks = std::max(n_blocks, static_cast<std::size_t>(b) + 1);
+  std::vector<std::vector<std::size_t>> blocks_of_run(plan.runs.size());
+  {
+    std::size_t row = 0;
+    for (std::size_t r = 0; r < plan.runs.size(); ++r)
+      for (std::size_t k = 0; k < plan.runs[r].files.size(); ++k, ++row) {
+        const auto b = static_cast<std::size_t>(st.block_of_row[row]);
+        if (blocks_of_run[r].empty() || blocks_of_run[r].back() != b) blocks_of_run[r].push_back(b);
+      }
+  }
+  const double nan = std::nan("");
+  for (std::size_t g = 0; g < n_grids; ++g) {
+    schema::FilteredGroup::Drift& d = out[g];
+    d.out_of_range = drift_out_of_range[g];
+    std::vector<double> total(cells * kDriftFields, 0.0), block_num(n_blocks * cells, 0.0), block_den(n_blocks * cells, 0.0);
+    schema::FilteredGroup::Drift::PerSnapshot ps;
+    ps.count.assign(rows * cells, 0);
+    ps.numerator.assign(rows * cells, 0.0);
+    ps.denominator.assign(rows * cells, 0.0);
+    for (std::size_t k = 0; k < rows; ++k) {
+      const auto blk = static_cast<std::size_t>(st.block_of_row[k]);
+      for (std::size_t c = 0; c < cells; ++c) {
+        const double* x = &drift[k * per_row + (g * cells + c) * kDriftFields];
+        for (int f = 0; f < kDriftFields; ++f) total[c * kDriftFields + f] += x[f];
+        block_num[blk * cells + c] += x[1];
+        block_den[blk * cells + c] += x[2];
+        ps.count[k * cells + c] = static_cast<std::int64_t>(std::llround(x[0]));
+        ps.numerator[k * cells + c] = x[1];
+        ps.denominator[k * cells + c] = x[2];
+      }
+    }
+    d.count.assign(cells, 0);
+    d.numerator.assign(cells, 0.0);
+    d.denominator.assign(cells, 0.0);
+    d.magnitude.assign(cells, 0.0);
+    for (auto* v : {&d.phi_mean, &d.slip_mean, &d.H, &d.H_stderr}) v->assign(cells, nan);
+    for (std::size_t c = 0; c < cells; ++c) {
+      const double* t = &total[c * kDriftFields];
+      d.count[c] = static_cast<std::int64_t>(std::llround(t[0]));
+      d.numerator[c] = t[1];
+      d.denominator[c] = t[2];
+      d.magnitude[c] = t[3];
+      if (!(t[0] > 0)) continue;
+      d.phi_mean[c] = t[4] / t[0];
+      d.slip_mean[c] = t[5] / t[0];
+      if (t[2] != 0.0) d.H[c] = t[1] / t[2];
+    }
+    // bootstrap standard deviation of H per bin (running mean and M2 over the replicates)
+    std::mt19937_64 rng(o.seed ^ (0xd1f7ull + g));
+    std::vector<double> mult(n_blocks), num(cells), den(cells), mean(cells, 0.0), m2(cells, 0.0), valid(cells, 0.0);
+    for (int rep = 0; rep < o.bootstrap_replicates; ++rep) {
+      std::fill(mult.begin(), mult.end(), 0.0);
+      for (const auto& blocks : blocks_of_run) {
+        if (blocks.empty()) continue;
+        std::uniform_int_distribution<std::size_t> pick(0, blocks.size() - 1);
+        for (std::size_t k = 0; k < blocks.size(); ++k) mult[blocks[pick(rng)]] += 1;
+      }
+      std::fill(num.begin(), num.end(), 0.0);
+      std::fill(den.begin(), den.end(), 0.0);
+      for (std::size_t b = 0; b < n_blocks; ++b) {
+        if (mult[b] == 0) continue;
+        for (std::size_t c = 0; c < cells; ++c) {
+          num[c] += mult[b] * block_num[b * cells + c];
+          den[c] += mult[b] * block_den[b * cells + c];
+        }
+      }
+      for (std::size_t c = 0; c < cells; ++c) {
+        if (den[c] == 0.0 || d.count[c] == 0) continue;
+        const double h = num[c] / den[c];
+        valid[c] += 1;
+        const double delta = h - mean[c];
+        mean[c] += delta / valid[c];
+        m2[c] += delta * (h - mean[c]);
+      }
+    }
+    for (std::size_t c = 0; c < cells; ++c)
+      if (valid[c] > 1) d.H_stderr[c] = std::sqrt(m2[c] / (valid[c] - 1));
+    d.per_snapshot = std::move(ps);
+  }
+  return out;
+}
+
 /// The filtered file (core/schema/filtered.hpp) of the plan's runs and their statistics, written by rank 0.
 void write_filtered_file(const FilterPlan& plan, const FilterOptions& o, const std::vector<double>& sums,
                          const std::vector<std::int64_t>& out_of_range, const std::vector<std::vector<Sample>>& samples,
                          const Statistics& st, const std::vector<std::string>& checksums,
-                         const std::vector<EquivalentWidth>& equivalent) {
+                         const std::vector<EquivalentWidth>& equivalent,
+                         std::vector<schema::FilteredGroup::Drift> drift) {
   const RunPlan& r0 = plan.runs.front();
   const schema::RunPhysics& p = r0.physics;
   const std::size_t n_widths = plan.columns(), n_bins = plan.bin_edges.size() - 1, whole_col = plan.whole_box_column();
@@ -360,6 +456,7 @@ void write_filtered_file(const FilterPlan& plan, const FilterOptions& o, const s
   out.snapshot_checksums = checksums;
   out.snapshot_block = st.block_of_row;
   out.phi_edges = plan.bin_edges;
+  out.slip_edges = plan.slip_edges;
   std::vector<double> centre(n_bins);
   for (std::size_t b = 0; b < n_bins; ++b) centre[b] = 0.5 * (plan.bin_edges[b] + plan.bin_edges[b + 1]);
   for (std::size_t w = 0; w < n_widths; ++w) {
@@ -374,6 +471,7 @@ void write_filtered_file(const FilterPlan& plan, const FilterOptions& o, const s
     g.F = p.l_char_m / width;
     g.out_of_range = out_of_range[w];
     if (grid) g.grid = grid_attributes(r0.coarse[gi], equivalent[gi], p.diameter_m);
+    if (grid && plan.slip_bins() > 0) g.drift = std::move(drift[gi]);
     g.phi_center = centre;
     g.count = column(st.count_int, w, n_bins);
     g.phi_mean = column(st.phi_mean, w, n_bins);
@@ -434,6 +532,11 @@ std::size_t run_filter(const FilterOptions& o, MPI_Comm comm) {
   const std::size_t per_row = n_widths * n_bins * kSumFields;
   std::vector<double> sums(rows * per_row, 0.0);
   std::vector<std::int64_t> out_of_range(n_widths, 0);
+  // the drift sums: per row, grid, phi bin and slip bin, kDriftFields each (a slot per snapshot: exact reduction)
+  const std::size_t n_slip = plan.slip_bins();
+  const std::size_t drift_per_row = plan.grids.size() * n_bins * n_slip * kDriftFields;
+  std::vector<double> drift(rows * drift_per_row, 0.0);
+  std::vector<std::int64_t> drift_out_of_range(plan.grids.size(), 0);
   std::vector<std::vector<Sample>> samples(n_widths);
   std::vector<std::string> checksums(rows);
   double read_s = 0, filter_s = 0;
@@ -460,6 +563,12 @@ std::size_t run_filter(const FilterOptions& o, MPI_Comm comm) {
           s[3] = res.sums[c].slip;
           s[4] = res.sums[c].phi;
         }
+        for (std::size_t c = 0; c < res.drift.size(); ++c) {
+          double* x = &drift[k * drift_per_row + c * kDriftFields];
+          const DriftSums& ds = res.drift[c];
+          x[0] = ds.count, x[1] = ds.numerator, x[2] = ds.denominator, x[3] = ds.magnitude, x[4] = ds.phi, x[5] = ds.slip;
+        }
+        for (std::size_t g = 0; g < plan.grids.size(); ++g) drift_out_of_range[g] += res.drift_out_of_range[g];
         for (std::size_t w = 0; w < n_widths; ++w) {
           out_of_range[w] += res.out_of_range[w];
           samples[w].insert(samples[w].end(), res.samples[w].begin(), res.samples[w].end());
@@ -483,6 +592,15 @@ std::size_t run_filter(const FilterOptions& o, MPI_Comm comm) {
   // Every snapshot's slot is filled by exactly one rank and zero elsewhere: the sum is exact.
   MPI_Allreduce(MPI_IN_PLACE, sums.data(), static_cast<int>(sums.size()), MPI_DOUBLE, MPI_SUM, comm);
   MPI_Allreduce(MPI_IN_PLACE, out_of_range.data(), static_cast<int>(n_widths), MPI_INT64_T, MPI_SUM, comm);
+  if (!drift.empty()) {  // in pieces: the drift sums may exceed an int count for long pools
+    const std::size_t piece = std::size_t{1} << 26;
+    for (std::size_t at = 0; at < drift.size(); at += piece)
+      MPI_Allreduce(MPI_IN_PLACE, drift.data() + at, static_cast<int>(std::min(piece, drift.size() - at)), MPI_DOUBLE,
+                    MPI_SUM, comm);
+  }
+  if (!drift_out_of_range.empty())
+    MPI_Allreduce(MPI_IN_PLACE, drift_out_of_range.data(), static_cast<int>(drift_out_of_range.size()), MPI_INT64_T,
+                  MPI_SUM, comm);
   // checksums and samples to rank 0
   {
     std::string mine;
@@ -526,7 +644,8 @@ std::size_t run_filter(const FilterOptions& o, MPI_Comm comm) {
         const double t0 = wall_seconds();
         const Statistics st = compute_statistics(plan, o, sums);
         const std::vector<EquivalentWidth> equivalent = equivalent_widths(plan, st);
-        write_filtered_file(plan, o, sums, out_of_range, samples, st, checksums, equivalent);
+        write_filtered_file(plan, o, sums, out_of_range, samples, st, checksums, equivalent,
+                            drift_groups(plan, o, drift, st, drift_out_of_range));
         if (!o.quiet) {
           const schema::RunPhysics& p = plan.runs.front().physics;
           std::cerr << "cgd-filter: wrote " << o.output_path << " in " << wall_seconds() - t_start << " s (reading "
@@ -559,6 +678,16 @@ std::size_t run_filter(const FilterOptions& o, MPI_Comm comm) {
                         << std::sqrt(6.0) << "), " << e.bins << " bins, rms H mismatch " << e.rms << "\n";
             else
               std::cout << "not determined (no bin with >= 100 samples at the grid and every width)\n";
+            if (n_slip > 0) {  // the drift sums of this grid: how many (phi, slip) bins a drift table could use
+              const std::size_t cells = n_bins * n_slip;
+              std::vector<double> count(cells, 0.0);
+              for (std::size_t k = 0; k < rows; ++k)
+                for (std::size_t c = 0; c < cells; ++c) count[c] += drift[k * drift_per_row + (g * cells + c) * kDriftFields];
+              const auto full = std::count_if(count.begin(), count.end(), [](double x) { return x >= 100; });
+              std::cout << "  drift sums: " << full << " (phi_bar, cell slip) bins with >= 100 samples (slip bins of "
+                        << plan.slip_edges[1] << " u_t up to " << plan.slip_edges.back() << " u_t), "
+                        << drift_out_of_range[g] << " samples beyond them\n";
+            }
             std::cout << "  phi_bar   count     H_grid   [95 % interval]\n";
             const std::size_t col = whole_col + 1 + g;
             for (std::size_t b = 0; b < n_bins; ++b) {

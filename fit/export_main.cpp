@@ -119,6 +119,11 @@ int main(int argc, char** argv) {
     std::vector<double> phis, deltas;
     if (!radl) {
       model = cgd::load_drag_model(model_path);
+      if (model->drift)
+        throw cgd::InputError("cgd-export: " + model_path + " is a drift table (curves = \"drift_table\", cgd-fit "
+                              "--drift-table): the drift-velocity closure needs the cell-mean particle velocity of the "
+                              "code using it and is not exported; export a model of h(phi), a(phi) or a --grid-table "
+                              "table instead (docs/export.md)");
       e = cgd::exporter::from_model(*model, name, model_provenance(*model));
       bands = {model->bands.phi, model->bands.F, model->bands.H_low, model->bands.H_high};
       deltas = e.calibrated_delta_m;

@@ -33,6 +33,7 @@ WidthSeries width_series(const schema::FilteredGroup& g, const std::string& path
     w.micro = g.per_snapshot->micro;
     w.snapshot_count = g.per_snapshot->count;
   }
+  if (g.drift) w.drift = WidthSeries::Drift{g.drift->count, g.drift->numerator, g.drift->denominator, g.drift->magnitude};
   return w;
 }
 
@@ -45,6 +46,7 @@ FilteredFile read_filtered_file(const std::string& path) {
   out.scene_toml = s.scene_toml;
   out.physics = s.system;
   out.phi_edges = s.phi_edges;
+  out.slip_edges = s.slip_edges;
   out.run_paths = s.run_paths;
   out.snapshot_run = s.snapshot_run_index;
   out.snapshot_block = s.snapshot_block;

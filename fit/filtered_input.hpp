@@ -4,6 +4,7 @@
 // that files pooled into one fit describe the same physics.
 #include <cmath>
 #include <cstdint>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -29,6 +30,13 @@ struct WidthSeries {
   // per-snapshot sums (n_snapshots x n_bins, row-major), empty when the file has no /per_snapshot
   std::vector<double> numerator, micro;
   std::vector<std::int64_t> snapshot_count;
+  // grid: the drift-velocity closure's sums (`drift/`, cgd-filter --grids), totals of shape (n_bins, n_slip)
+  // row-major; empty when the file has none
+  struct Drift {
+    std::vector<std::int64_t> count;
+    std::vector<double> numerator, denominator, magnitude;
+  };
+  std::optional<Drift> drift;
 };
 
 struct FilteredFile {
@@ -36,6 +44,7 @@ struct FilteredFile {
   std::string scene_toml;  // root attribute `scene`
   PhysicalSystem physics;  // root attributes (core/physical_system.hpp); the law under micro_drag
   std::vector<double> phi_edges;       // /bins/phi_edges
+  std::vector<double> slip_edges;      // /bins/slip_edges (u_t): the drift sums' slip bins; empty without them
   std::vector<WidthSeries> widths;     // the box widths in file order, then /whole_box if present
   std::vector<WidthSeries> grids;      // /grids/<N> (cgd-filter --grids), cells across descending; may be empty
   std::vector<std::string> run_paths;  // /runs paths

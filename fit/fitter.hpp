@@ -27,7 +27,8 @@
 // size (operator "grid": filtered_input.hpp select_operator; docs/fit.md "The coarse grid's operator").
 // Low phi (docs/fit.md "Low phi"): a bin's a is bounded by a F^n <= 10 at its widest width (beyond it only
 // h/a is identified), and the model's a(phi) is clipped to the range of the bins' log a (log_a_min/max).
-// The perfect-closure table (write_grid_table_model) is H_grid of one grid, piecewise linear in phi.
+// The perfect-closure table (write_grid_table_model) is H_grid of one grid, piecewise linear in phi; the drift
+// table (write_drift_table_model) the drift-velocity closure's H(phi, cell slip) of one grid, bilinear.
 #include <cstdint>
 #include <iosfwd>
 #include <string>
@@ -143,6 +144,18 @@ std::string fit_report(const FitResult& result, const std::vector<FilteredFile>&
 /// report.
 std::string write_grid_table_model(const std::string& path, const std::vector<FilteredFile>& files, int cells_across,
                                    std::int64_t min_count, const Scene& scene);
+
+/// The drift-velocity closure's table (cgd-fit --drift-table N, docs/closure.md "The drift-velocity closure"): the drift sums of
+/// the grid of N cells across (`/grids/<N>/drift` of cgd-filter --grids), pooled over the files, as the table
+/// H(phi_k, s_m) = numerator / denominator of a model file with curves = "drift_table" on the bins' centres. Rows:
+/// the phi bins whose phi-only H_grid has >= min_count samples (with a non-zero micro sum); a (phi, slip) bin is
+/// measured when it has >= min_count samples and |denominator| >= min_alignment x magnitude (the cell slip mostly
+/// vertical, so the ratio is well conditioned); columns: the slip bins from the first to the last measured one of any
+/// row. A bin not measured takes the H of the nearest measured slip bin of its row (the lower one on a tie), and a
+/// row with none the row's phi-only H_grid (`filled` = 1, 2). InputError naming the files when a file lacks the
+/// sums, the files' slip bins differ, fewer than 2 rows or no measured bin. Writes atomically; returns the report.
+std::string write_drift_table_model(const std::string& path, const std::vector<FilteredFile>& files, int cells_across,
+                                    std::int64_t min_count, double min_alignment, const Scene& scene);
 
 /// Write the model file (docs/schema-drag-model.md) atomically; `scene` supplies the common root
 /// attributes and /params (the first filtered file's scene).

@@ -73,6 +73,16 @@ int main(int argc, char** argv) {
                    "Perfect-closure model: write H_grid of the grid of N cells across as a table model (curves = table, "
                    "a = 0): a coarse run on that grid applies exactly the a-priori correction (docs/fit.md)")
         ->type_name("N");
+    int drift_table = 0;
+    app.add_option("--drift-table", drift_table,
+                   "Drift-velocity closure: write the drift sums of the grid of N cells across (cgd-filter --grids) as a "
+                   "drift table H(phi, cell slip) (curves = drift_table), used with fluid.drag = \"drift\" (docs/closure.md \"The drift-velocity closure\")")
+        ->type_name("N");
+    double drift_min_alignment = 0.25;
+    app.add_option("--drift-min-alignment", drift_min_alignment,
+                   "With --drift-table: a (phi, slip) bin is measured when |sum beta s~_y| >= X sum beta |s~| (the cell "
+                   "slip mostly vertical: H = N/S well conditioned) and it has --min-count samples (default 0.25)")
+        ->check(CLI::Range(0.0, 1.0));
     std::string parcel_model;
     app.add_option("--parcel-fit", parcel_model,
                    "Parcel fit: the inputs are cgd-coarse run directories run with this model and "
@@ -130,6 +140,10 @@ int main(int argc, char** argv) {
                             cgd::calibration_operator_choices());
     if (app.count("--grid-table") && grid_table < 1)
       throw cgd::InputError("cgd-fit: --grid-table " + std::to_string(grid_table) + ": allowed a number of cells across >= 1");
+    if (app.count("--drift-table") && drift_table < 1)
+      throw cgd::InputError("cgd-fit: --drift-table " + std::to_string(drift_table) + ": allowed a number of cells across >= 1");
+    if (app.count("--drift-table") && app.count("--grid-table"))
+      throw cgd::InputError("cgd-fit: --drift-table and --grid-table each write one table model: give one");
     options.calibration_operator = *calibration;
     // a grid equal to the resolved one is the identity (H_grid = 0 by construction): a check, not data
     if (*calibration == cgd::CalibrationOperator::Grid && !app.count("--min-width-over-cell"))
@@ -138,6 +152,14 @@ int main(int argc, char** argv) {
     std::vector<cgd::fit::FilteredFile> files;
     for (const std::string& path : inputs) files.push_back(cgd::fit::read_filtered_file(path));
     cgd::fit::check_same_physics(files);
+    if (app.count("--drift-table")) {
+      const cgd::Scene table_scene =
+          cgd::load_scene_from_string(files.front().scene_toml, files.front().path + " (scene)");
+      const std::string report = cgd::fit::write_drift_table_model(output, files, drift_table, options.min_count,
+                                                                   drift_min_alignment, table_scene);
+      if (!quiet) std::cout << report << "wrote " << output << "\n";
+      return cgd::kExitOk;
+    }
     if (app.count("--grid-table")) {
       const cgd::Scene table_scene =
           cgd::load_scene_from_string(files.front().scene_toml, files.front().path + " (scene)");

@@ -245,6 +245,167 @@ std::string write_grid_table_model(const std::string& path, const std::vector<Fi
   return out.str();
 }
 
+std::string write_drift_table_model(const std::string& path, const std::vector<FilteredFile>& files, int cells_across,
+                                    std::int64_t min_count, double min_alignment, const Scene& scene) {
+  const std::string group = "/grids/" + std::to_string(cells_across);
+  const FilteredFile& first = files.front();
+  const std::size_t nb = first.bins();
+  if (first.slip_edges.size() < 2)
+    throw InputError(first.path + ": --drift-table needs the drift sums (" + group + "/drift and /bins/slip_edges of "
+                     "cgd-filter --grids " + std::to_string(cells_across) + "); the file has none: filter the runs again "
+                     "with this build");
+  const std::size_t ns = first.slip_edges.size() - 1, cells = nb * ns;
+  std::vector<double> num(nb, 0.0), mic(nb, 0.0), count(nb, 0.0);
+  std::vector<double> dnum(cells, 0.0), dden(cells, 0.0), dmag(cells, 0.0);
+  std::vector<std::int64_t> dcount(cells, 0);
+  double cell_over_dp = 0;
+  for (const FilteredFile& f : files) {
+    const WidthSeries* g = nullptr;
+    for (const WidthSeries& w : f.grids)
+      if (w.cells_across == cells_across) g = &w;
+    if (!g)
+      throw InputError(f.path + ": --drift-table " + std::to_string(cells_across) + ": the file has no " + group +
+                       " (filter the runs with cgd-filter --grids " + std::to_string(cells_across) + ")");
+    if (!g->drift)
+      throw InputError(f.path + ": --drift-table " + std::to_string(cells_across) + ": " + group + " has no drift sums (" +
+                       group + "/drift): filter the runs again with this build's cgd-filter --grids");
+    if (!f.has_per_snapshot)
+      throw InputError(f.path + ": --drift-table needs the per-snapshot sums (" + group + "/per_snapshot) for the rows' "
+                       "phi-only H_grid");
+    auto same = [](double a, double b) { return std::abs(a - b) <= 1e-9 * std::max(1.0, std::max(std::abs(a), std::abs(b))); };
+    if (f.slip_edges.size() != first.slip_edges.size() ||
+        !std::equal(f.slip_edges.begin(), f.slip_edges.end(), first.slip_edges.begin(), same))
+      throw InputError(f.path + " and " + first.path + " have different slip bins (/bins/slip_edges); filter the runs "
+                       "with the same --slip-bins to pool them");
+    if (cell_over_dp == 0) cell_over_dp = g->cell_size_over_dp;
+    if (std::abs(g->cell_size_over_dp - cell_over_dp) > 1e-6 * cell_over_dp)
+      throw InputError(f.path + ": " + group + " has cells of " + format("%.6g", g->cell_size_over_dp) + " d_p, " +
+                       first.path + " of " + format("%.6g", cell_over_dp) + " d_p: a table is for one grid");
+    for (std::size_t k = 0; k < f.snapshots(); ++k)
+      for (std::size_t b = 0; b < nb; ++b) {
+        num[b] += g->numerator[k * nb + b];
+        mic[b] += g->micro[k * nb + b];
+      }
+    for (std::size_t b = 0; b < nb; ++b) count[b] += static_cast<double>(g->count[b]);
+    for (std::size_t c = 0; c < cells; ++c) {
+      dcount[c] += g->drift->count[c];
+      dnum[c] += g->drift->numerator[c];
+      dden[c] += g->drift->denominator[c];
+      dmag[c] += g->drift->magnitude[c];
+    }
+  }
+  auto measured = [&](std::size_t c) {
+    return dcount[c] >= min_count && dden[c] != 0.0 && std::abs(dden[c]) >= min_alignment * dmag[c];
+  };
+  // rows: the phi bins of the phi-only table; columns: the slip bins from the first to the last measured one
+  std::vector<std::size_t> rows;
+  for (std::size_t b = 0; b < nb; ++b)
+    if (count[b] >= static_cast<double>(min_count) && mic[b] != 0.0) rows.push_back(b);
+  std::size_t m_lo = ns, m_hi = 0;
+  for (std::size_t b : rows)
+    for (std::size_t m = 0; m < ns; ++m)
+      if (measured(b * ns + m)) m_lo = std::min(m_lo, m), m_hi = std::max(m_hi, m);
+  if (rows.size() < 2)
+    throw InputError(first.path + ": --drift-table " + std::to_string(cells_across) + ": " + std::to_string(rows.size()) +
+                     " phi bin(s) of " + group + " have >= " + std::to_string(min_count) +
+                     " samples; a table needs at least 2 (lower --min-count or filter longer runs)");
+  if (m_lo > m_hi)
+    throw InputError(first.path + ": --drift-table " + std::to_string(cells_across) + ": no (phi, slip) bin of " + group +
+                     "/drift has >= " + std::to_string(min_count) + " samples and |denominator| >= " +
+                     format("%.3g", min_alignment) + " x magnitude (lower --min-count or --drift-min-alignment)");
+  DragModelFile::DriftTable t;
+  const double phi_w = first.phi_edges[1] - first.phi_edges[0], slip_w = first.slip_edges[1] - first.slip_edges[0];
+  for (std::size_t b : rows) t.phi.push_back(0.5 * (first.phi_edges[b] + first.phi_edges[b + 1]));
+  for (std::size_t m = m_lo; m <= m_hi; ++m) t.slip.push_back(0.5 * (first.slip_edges[m] + first.slip_edges[m + 1]));
+  const std::size_t nc = t.slip.size();
+  std::size_t n_measured = 0, n_nearest = 0, n_phi_only = 0;
+  for (std::size_t b : rows) {
+    const double phi_only = 1.0 - num[b] / mic[b];
+    t.phi_only_H.push_back(phi_only);
+    for (std::size_t j = 0; j < nc; ++j) {
+      const std::size_t m = m_lo + j, c = b * ns + m;
+      double H = phi_only;
+      std::int64_t filled = 2;
+      if (measured(c)) {
+        H = dnum[c] / dden[c], filled = 0;
+      } else {  // the nearest measured slip bin of the row (the lower one on a tie)
+        for (std::size_t dist = 1; dist < ns && filled == 2; ++dist) {
+          if (m >= dist && measured(c - dist)) H = dnum[c - dist] / dden[c - dist], filled = 1;
+          else if (m + dist < ns && measured(c + dist)) H = dnum[c + dist] / dden[c + dist], filled = 1;
+        }
+      }
+      (filled == 0 ? n_measured : filled == 1 ? n_nearest : n_phi_only) += 1;
+      t.H.push_back(H);
+      t.filled.push_back(filled);
+      t.count.push_back(dcount[c]);
+      t.numerator.push_back(dnum[c]);
+      t.denominator.push_back(dden[c]);
+      t.magnitude.push_back(dmag[c]);
+    }
+  }
+  t.source_group = group + "/drift";
+  t.min_count = min_count;
+  t.min_alignment = min_alignment;
+  t.phi_bin_width = phi_w;
+  t.slip_bin_width = slip_w;
+  t.fill_rule =
+      "H = numerator/denominator where count >= min_count and |denominator| >= min_alignment x magnitude (filled = 0); "
+      "else the H of the nearest such slip bin of the same phi row, the lower on a tie (filled = 1); a row with none: "
+      "the row's phi-only H_grid = 1 - sum N / sum M of " + group + " (filled = 2). Rows: the phi bins with >= min_count "
+      "samples of " + group + "; columns: the slip bins from the first to the last measured one";
+
+  DragModel M;
+  static_cast<PhysicalSystem&>(M) = first.physics;
+  const double delta = cell_over_dp * M.diameter_m;
+  // /h: the rows' phi-only H_grid as an order-2 B-spline (the fallback of the table, not used by the law)
+  M.h_spline.order = 2;
+  M.h_spline.knots.push_back(t.phi.front());
+  M.h_spline.knots.insert(M.h_spline.knots.end(), t.phi.begin(), t.phi.end());
+  M.h_spline.knots.push_back(t.phi.back());
+  M.h_spline.coefficients = t.phi_only_H;
+  M.log_a_spline = M.h_spline;
+  M.log_a_spline.coefficients.assign(t.phi.size(), -700.0);
+  M.h_max = 0.99;
+  M.phi_crit = t.phi.front();
+  M.width_exponent = 1.0;
+  M.table_cells_across = cells_across;
+  M.calibration_operator = CalibrationOperator::Grid;
+  M.c_corr_a = 1.0, M.c_corr_k = 0.0, M.c_corr_source = "none";
+  DragModelFile m = model_record(
+      M,
+      "drift-velocity closure (fluid.drag = \"drift\"): F_i = V_i beta_micro(phi_i, |u_i - v_i|) [(u_i - v_i) - "
+      "H(phi_i, s_i) s~_i], s~_i = u_i - vbar_i the cell slip (vbar the TSC cell-mean particle velocity, interpolated), "
+      "s_i = |s~_i|/u_t; H of /drift_table, bilinear on its bin centres, constant outside, clamped to [-1, h_max]",
+      "the rows' phi-only H_grid (order-2 B-spline through /drift_table/phi_only_H): the table's fallback, not used "
+      "by the law",
+      "log a = -700: a = 0 (the table has no width dependence)");
+  m.curves = schema::ModelCurves::DriftTable;
+  m.calibrated_delta_m = {delta};
+  m.calibrated_delta_over_dp = {cell_over_dp};
+  m.calibrated_cells_across = {cells_across};
+  m.drift_table = t;
+  set_sources(m, files);
+  schema::write_drag_model(path, scene, m);
+
+  std::ostringstream out;
+  out << "cgd-fit --drift-table " << cells_across << ": the drift-velocity closure's H(phi, cell slip) of the grid of "
+      << cells_across << " cells across (cell " << format("%.4g", cell_over_dp) << " d_p), pooled over " << files.size()
+      << " file(s): " << t.phi.size() << " phi rows x " << nc << " slip columns (" << format("%.3g", t.slip.front())
+      << " to " << format("%.3g", t.slip.back()) << " u_t); " << n_measured << " bins measured (>= " << min_count
+      << " samples, |denominator| >= " << format("%.3g", min_alignment) << " x magnitude), " << n_nearest
+      << " filled from the nearest slip bin, " << n_phi_only << " from the row's phi-only H_grid\n"
+      << "  H (phi rows, slip columns in u_t; * = filled)\n      phi  phi-only";
+  for (double x : t.slip) out << format(" %6.2f ", x);
+  out << "\n";
+  for (std::size_t i = 0; i < t.phi.size(); ++i) {
+    out << format("  %7.4f", t.phi[i]) << format("  %7.3f ", t.phi_only_H[i]);
+    for (std::size_t j = 0; j < nc; ++j)
+      out << format(" %6.3f", t.H[i * nc + j]) << (t.filled[i * nc + j] ? "*" : " ");
+    out << "\n";
+  }
+  return out.str();
+}
+
 std::string fit_report(const FitResult& R, const std::vector<FilteredFile>& files, const FitOptions& o) {
   std::ostringstream out;
   const SplineCurves curves{&R.model};

@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cstdio>
+#include <functional>
 
 #include "core/error.hpp"
 #include "core/h5.hpp"
@@ -43,6 +44,7 @@ constexpr const char* kBins = "/bins";
 constexpr const char* kData = "/data";
 constexpr const char* kDiagnostics = "/diagnostics";
 constexpr const char* kTable = "/table";
+constexpr const char* kDriftTable = "/drift_table";
 constexpr const char* kSources = "/sources";
 constexpr const char* kProvenance = "/provenance";
 constexpr const char* kProvenanceKeys[] = {"made_by", "resolved_runs", "valid_for", "validation"};
@@ -133,6 +135,12 @@ constexpr Ints<Diagnostics> kCrossValidationInts[] = {{"cv_run", &Diagnostics::c
 using Table = M::Table;
 constexpr Vec<Table> kTableColumns[] = {{"phi", &Table::phi}, {"H", &Table::H}, {"count", &Table::count}};
 
+using Drift = M::DriftTable;
+// (n_phi, n_slip) float datasets of /drift_table: H finite everywhere (the law reads it), the pooled sums not
+constexpr Vec<Drift> kDriftSums[] = {
+    {"numerator", &Drift::numerator}, {"denominator", &Drift::denominator}, {"magnitude", &Drift::magnitude}};
+constexpr Ints<Drift> kDriftInts[] = {{"count", &Drift::count}, {"filled", &Drift::filled}};
+
 std::string number(double x) {
   char buf[32];
   std::snprintf(buf, sizeof buf, "%.9g", x);
@@ -162,7 +170,7 @@ void write_root(h5::File& f, const M& m) {
   f.set_attr("/", kOperator, std::string(to_string(m.calibration_operator)));
   if (grid) f.set_attr("/", kKernel, std::string("tsc"));
   f.set_attr("/", kCurves, std::string(to_string(m.curves)));
-  if (m.curves == ModelCurves::Table) f.set_attr("/", kTableCellsAcross, m.table_cells_across);
+  if (m.curves != ModelCurves::Splines) f.set_attr("/", kTableCellsAcross, m.table_cells_across);
   if (!m.calibrated_delta_m.empty()) {
     f.set_attr("/", kCalibratedDelta, m.calibrated_delta_m);
     f.set_attr("/", kCalibratedDeltaOverDp, m.calibrated_delta_over_dp);
@@ -281,6 +289,24 @@ void write_table(h5::File& f, const Table& t) {
   f.set_attr(kTable, "min_count", t.min_count);
 }
 
+void write_drift_table(h5::File& f, const Drift& t) {
+  f.create_group(kDriftTable);
+  const std::vector<std::uint64_t> shape{t.phi.size(), t.slip.size()};
+  write_vector(f, child(kDriftTable, "phi"), t.phi);
+  write_vector(f, child(kDriftTable, "slip"), t.slip);
+  f.write_replicated(child(kDriftTable, "H"), t.H, shape);
+  for (const auto& v : kDriftSums) f.write_replicated(child(kDriftTable, v.name), t.*v.member, shape);
+  for (const auto& v : kDriftInts) f.write_replicated(child(kDriftTable, v.name), t.*v.member, shape);
+  write_vector(f, child(kDriftTable, "phi_only_H"), t.phi_only_H);
+  f.set_attr(kDriftTable, "source_group", t.source_group);
+  f.set_attr(kDriftTable, "fill_rule", t.fill_rule);
+  f.set_attr(kDriftTable, "min_count", t.min_count);
+  f.set_attr(kDriftTable, "min_alignment", t.min_alignment);
+  f.set_attr(kDriftTable, "phi_bin_width", t.phi_bin_width);
+  f.set_attr(kDriftTable, "slip_bin_width", t.slip_bin_width);
+  f.set_attr(kDriftTable, "slip_unit", std::string("u_t"));
+}
+
 void write_sources(h5::File& f, const M& m) {
   f.create_group(kSources);
   f.set_attr(kSources, "files", m.source_files);
@@ -347,7 +373,8 @@ void read_calibration(const h5::File& f, M& m, const Spelling& spelling) {
     const std::string text = f.attr_string("/", kCurves);
     if (text == to_string(ModelCurves::Splines)) m.curves = ModelCurves::Splines;
     else if (text == to_string(ModelCurves::Table)) m.curves = ModelCurves::Table;
-    else refuse(f, "attribute 'curves' of '/' is \"" + text + "\", expected \"splines\" or \"table\"");
+    else if (text == to_string(ModelCurves::DriftTable)) m.curves = ModelCurves::DriftTable;
+    else refuse(f, "attribute 'curves' of '/' is \"" + text + "\", expected \"splines\", \"table\" or \"drift_table\"");
   }
   if (f.has_attr("/", kCalibratedDelta)) m.calibrated_delta_m = finite_attrs(f, "/", kCalibratedDelta);
   if (f.has_attr("/", kCalibratedDeltaOverDp)) m.calibrated_delta_over_dp = finite_attrs(f, "/", kCalibratedDeltaOverDp);
@@ -522,6 +549,50 @@ std::optional<Table> read_table(const h5::File& f) {
   return t;
 }
 
+/// `/drift_table`: required with curves = drift_table (and read only then). phi and slip finite, strictly
+/// increasing, at least one each; H finite of shape (len(phi), len(slip)), the sums of that shape, count and filled
+/// int64 of that shape (count >= 0, filled in {0, 1, 2}), phi_only_H of len(phi).
+std::optional<Drift> read_drift_table(const h5::File& f, const M& m) {
+  if (m.curves != ModelCurves::DriftTable) return std::nullopt;
+  require_group(f, kDriftTable);
+  Drift t;
+  auto axis = [&](const char* name) {
+    const std::string path = child(kDriftTable, name);
+    std::vector<double> x = read_doubles(f, path, {kAnyExtent}, Finite::Everywhere);
+    if (x.empty() || std::adjacent_find(x.begin(), x.end(), std::greater_equal<>()) != x.end())
+      refuse(f, "dataset '" + path + "' holds " + std::to_string(x.size()) +
+                    " values, expected at least one, strictly increasing (the table's bin centres)");
+    return x;
+  };
+  t.phi = axis("phi");
+  t.slip = axis("slip");
+  const std::vector<std::uint64_t> shape{t.phi.size(), t.slip.size()};
+  const std::string why = "(len(/drift_table/phi), len(/drift_table/slip))";
+  t.H = read_doubles(f, child(kDriftTable, "H"), shape, Finite::Everywhere, why);
+  for (const auto& v : kDriftSums)
+    if (f.exists(child(kDriftTable, v.name))) t.*v.member = read_doubles(f, child(kDriftTable, v.name), shape, Finite::Not, why);
+  for (const auto& v : kDriftInts) t.*v.member = read_ints(f, child(kDriftTable, v.name), shape, why);
+  for (std::size_t k = 0; k < t.count.size(); ++k) {
+    if (t.count[k] < 0)
+      refuse(f, "dataset '/drift_table/count' holds " + std::to_string(t.count[k]) + ", expected counts >= 0");
+    if (t.filled[k] < 0 || t.filled[k] > 2)
+      refuse(f, "dataset '/drift_table/filled' holds " + std::to_string(t.filled[k]) +
+                    ", expected 0 (measured), 1 (nearest slip bin) or 2 (phi-only H_grid)");
+  }
+  if (f.exists(child(kDriftTable, "phi_only_H")))
+    t.phi_only_H = read_doubles(f, child(kDriftTable, "phi_only_H"), {t.phi.size()}, Finite::Not, "len(/drift_table/phi)");
+  if (f.has_attr(kDriftTable, "source_group")) t.source_group = f.attr_string(kDriftTable, "source_group");
+  if (f.has_attr(kDriftTable, "fill_rule")) t.fill_rule = f.attr_string(kDriftTable, "fill_rule");
+  if (f.has_attr(kDriftTable, "min_count")) t.min_count = f.attr_int(kDriftTable, "min_count");
+  if (f.has_attr(kDriftTable, "min_alignment")) t.min_alignment = f.attr_double(kDriftTable, "min_alignment");
+  if (f.has_attr(kDriftTable, "phi_bin_width")) t.phi_bin_width = f.attr_double(kDriftTable, "phi_bin_width");
+  if (f.has_attr(kDriftTable, "slip_bin_width")) t.slip_bin_width = f.attr_double(kDriftTable, "slip_bin_width");
+  if (f.has_attr(kDriftTable, "slip_unit") && f.attr_string(kDriftTable, "slip_unit") != "u_t")
+    refuse(f, "attribute 'slip_unit' of '/drift_table' is \"" + f.attr_string(kDriftTable, "slip_unit") +
+                  "\", expected \"u_t\"");
+  return t;
+}
+
 void read_sources_and_provenance(const h5::File& f, M& m) {
   if (f.has_attr(kSources, "files")) m.source_files = f.attr_strings(kSources, "files");
   if (f.has_attr(kSources, "checksums")) m.source_checksums = f.attr_strings(kSources, "checksums");
@@ -532,7 +603,14 @@ void read_sources_and_provenance(const h5::File& f, M& m) {
 
 }  // namespace
 
-const char* to_string(ModelCurves curves) { return curves == ModelCurves::Table ? "table" : "splines"; }
+const char* to_string(ModelCurves curves) {
+  switch (curves) {
+    case ModelCurves::Table: return "table";
+    case ModelCurves::DriftTable: return "drift_table";
+    case ModelCurves::Splines: break;
+  }
+  return "splines";
+}
 
 void write_drag_model(const std::string& path, const Scene& scene, const DragModelFile& m) {
   h5::write_atomically(path, MPI_COMM_SELF, [&](h5::File& f) {
@@ -541,6 +619,7 @@ void write_drag_model(const std::string& path, const Scene& scene, const DragMod
     write_spline(f, kH, m.h);
     write_spline(f, kLogA, m.log_a);
     if (m.table) write_table(f, *m.table);
+    if (m.drift_table) write_drift_table(f, *m.drift_table);
     write_c_corr(f, m.c_corr);
     if (m.bands) write_bands(f, *m.bands);
     if (m.bins) write_bins(f, *m.bins);
@@ -561,15 +640,16 @@ DragModelFile read_drag_model(const std::string& path) {
   read_root(f, m);
   m.h = read_spline(f, kH);
   m.log_a = read_spline(f, kLogA);
-  if (m.curves == ModelCurves::Table && m.h.order != 2)
-    refuse(f, "attribute 'order' of '/h' is " + std::to_string(m.h.order) +
-                  ", expected 2 with curves = \"table\" (piecewise linear)");
+  if (m.curves != ModelCurves::Splines && m.h.order != 2)
+    refuse(f, "attribute 'order' of '/h' is " + std::to_string(m.h.order) + ", expected 2 with curves = \"" +
+                  to_string(m.curves) + "\" (piecewise linear)");
   m.c_corr = read_c_corr(f);
   m.bands = read_bands(f);
   m.bins = read_bins(f);
   m.data = read_data(f);
   m.diagnostics = read_diagnostics(f);
   m.table = read_table(f);
+  m.drift_table = read_drift_table(f, m);
   read_sources_and_provenance(f, m);
   return m;
 }

@@ -20,10 +20,11 @@ struct Scene;
 
 namespace cgd::schema {
 
-/// The master curves' form (attribute `curves`): B-splines of h and log a, or the piecewise-linear table of
-/// H_grid of one grid (cgd-fit --grid-table). Absent in a file: Splines.
-enum class ModelCurves { Splines, Table };
-const char* to_string(ModelCurves curves);  // "splines", "table"
+/// The master curves' form (attribute `curves`): B-splines of h and log a, the piecewise-linear table of
+/// H_grid of one grid (cgd-fit --grid-table), or the drift-velocity closure's table H(phi, cell slip) of one grid
+/// (cgd-fit --drift-table; `/drift_table`, for fluid.drag = "drift" only). Absent in a file: Splines.
+enum class ModelCurves { Splines, Table, DriftTable };
+const char* to_string(ModelCurves curves);  // "splines", "table", "drift_table"
 
 /// A B-spline group (`/h`, `/log_a`): order k, the full knot vector (n + k), n coefficients, its meaning.
 struct SplineRecord {
@@ -111,6 +112,17 @@ struct DragModelFile {
     std::int64_t min_count = 0;
   };
   std::optional<Table> table;
+
+  struct DriftTable {  // `/drift_table` (curves = drift_table; docs/schema-drag-model.md)
+    std::vector<double> phi, slip;                      // bin centres: phi (n_phi), s^ = |s~|/u_t (n_slip)
+    std::vector<double> H, numerator, denominator, magnitude;  // (n_phi, n_slip); H finite, the sums pooled
+    std::vector<std::int64_t> count, filled;            // (n_phi, n_slip): samples; 0 measured, 1 nearest slip, 2 phi-only
+    std::vector<double> phi_only_H;                     // (n_phi): the phi-only H_grid of each row (the fallback)
+    std::string source_group, fill_rule;
+    std::int64_t min_count = 0;
+    double min_alignment = NAN, phi_bin_width = NAN, slip_bin_width = NAN;
+  };
+  std::optional<DriftTable> drift_table;
 
   std::vector<std::string> source_files, source_checksums;  // `/sources`
 

@@ -36,6 +36,13 @@ constexpr const char* kRuns = "/runs";
 constexpr const char* kSnapshots = "/snapshots";
 constexpr const char* kBins = "/bins";
 constexpr const char* kPhiEdges = "/bins/phi_edges";
+constexpr const char* kSlipEdges = "/bins/slip_edges";
+constexpr const char* kDriftDefinition =
+    "per grid and (phi bin, s_hat bin): vbar_c = sum_i w_ic v_i / sum_i w_ic (TSC deposit of the particle velocities "
+    "on the grid; u_C where nothing is deposited), vbar_i = sum_c w_ic vbar_c, cell slip s~_i = u~_i - vbar_i, "
+    "s_hat_i = |s~_i| / u_t; numerator = sum_i (M_i - N_i), denominator = sum_i beta_micro,i s~_i,y, magnitude = "
+    "sum_i beta_micro,i |s~_i| (M_i, N_i, beta_micro,i of the grid's H); H = numerator / denominator: the drift "
+    "closure F_i = V beta_micro [(u~_i - v_i) - H s~_i] reproduces the bin's total drag";
 constexpr const char* kGrids = "/grids";
 constexpr const char* kWholeBox = "/whole_box";
 constexpr const char* kWidthPrefix = "/width_";
@@ -99,6 +106,21 @@ constexpr SnapshotSums kSnapshotSums[] = {{"numerator", &PerSnapshot::numerator,
                                           {"micro", &PerSnapshot::micro, true},
                                           {"slip", &PerSnapshot::slip, false},
                                           {"phi", &PerSnapshot::phi, false}};
+
+using Drift = Group::Drift;
+struct DriftNumber {
+  const char* name;
+  std::vector<double> Drift::*member;
+  Finite finite;
+};
+// (n_bins, n_slip) float datasets of drift/: the sums finite everywhere, the ratios NaN where empty
+constexpr DriftNumber kDriftNumbers[] = {{"numerator", &Drift::numerator, Finite::Everywhere},
+                                         {"denominator", &Drift::denominator, Finite::Everywhere},
+                                         {"magnitude", &Drift::magnitude, Finite::Everywhere},
+                                         {"phi_mean", &Drift::phi_mean, Finite::Not},
+                                         {"slip_mean", &Drift::slip_mean, Finite::Not},
+                                         {"H", &Drift::H, Finite::Not},
+                                         {"H_stderr", &Drift::H_stderr, Finite::Not}};
 
 using Samples = Group::Samples;
 struct SampleColumn {
@@ -165,6 +187,11 @@ void write_runs_and_snapshots(h5::File& f, const Filtered& s) {
   write_vector(f, "/snapshots/block", s.snapshot_block);
   f.create_group(kBins);
   write_vector(f, kPhiEdges, s.phi_edges);
+  if (!s.slip_edges.empty()) {
+    write_vector(f, kSlipEdges, s.slip_edges);
+    f.set_attr(kBins, "slip_unit", std::string("u_t"));
+    f.set_attr(kBins, "drift_definition", std::string(kDriftDefinition));
+  }
   f.set_attr(kBins, "width", s.phi_edges.size() > 1 ? s.phi_edges[1] - s.phi_edges[0] : 0.0);
 }
 
@@ -186,7 +213,24 @@ void write_grid_attributes(h5::File& f, const std::string& g, const Grid& c) {
   f.set_attr(g, "equivalent_width_method", c.equivalent_width_method);
 }
 
-void write_group(h5::File& f, const std::string& g, const Group& w, std::uint64_t n_snapshots, std::uint64_t nb) {
+void write_drift(h5::File& f, const std::string& g, const Drift& d, std::uint64_t n_snapshots, std::uint64_t nb,
+                 std::uint64_t n_slip) {
+  const std::string dg = g + "/drift";
+  f.create_group(dg);
+  f.set_attr(dg, "out_of_range", d.out_of_range);
+  f.write_replicated(dg + "/count", d.count, {nb, n_slip});
+  for (const DriftNumber& n : kDriftNumbers) f.write_replicated(dg + "/" + n.name, d.*n.member, {nb, n_slip});
+  if (d.per_snapshot) {
+    const std::string ps = dg + "/per_snapshot";
+    f.create_group(ps);
+    f.write_replicated(ps + "/count", d.per_snapshot->count, {n_snapshots, nb, n_slip});
+    f.write_replicated(ps + "/numerator", d.per_snapshot->numerator, {n_snapshots, nb, n_slip});
+    f.write_replicated(ps + "/denominator", d.per_snapshot->denominator, {n_snapshots, nb, n_slip});
+  }
+}
+
+void write_group(h5::File& f, const std::string& g, const Group& w, std::uint64_t n_snapshots, std::uint64_t nb,
+                 std::uint64_t n_slip) {
   f.create_group(g);
   f.set_attr(g, "kind", std::string(to_string(w.kind)));
   for (const auto& n : kGroupNumbers) f.set_attr(g, n.name, w.*n.member);
@@ -206,6 +250,7 @@ void write_group(h5::File& f, const std::string& g, const Group& w, std::uint64_
       if (s.required || !((*w.per_snapshot).*s.member).empty())
         f.write_replicated(ps + "/" + s.name, (*w.per_snapshot).*s.member, {n_snapshots, nb});
   }
+  if (w.drift) write_drift(f, g, *w.drift, n_snapshots, nb, n_slip);
   if (w.samples) {
     const Samples& s = *w.samples;
     const std::string sg = g + "/samples";
@@ -288,6 +333,13 @@ void read_runs_and_snapshots(const h5::File& f, Filtered& s) {
       std::adjacent_find(s.phi_edges.begin(), s.phi_edges.end(), std::greater_equal<>()) != s.phi_edges.end())
     throw InputError(path + ": dataset '/bins/phi_edges' holds " + std::to_string(s.phi_edges.size()) +
                      " edges, expected at least two, strictly increasing");
+  if (f.exists(kSlipEdges)) {  // the drift sums' slip bins (absent in files written before them)
+    s.slip_edges = read_doubles(f, kSlipEdges, {kAnyExtent}, Finite::Everywhere);
+    if (s.slip_edges.size() < 2 ||
+        std::adjacent_find(s.slip_edges.begin(), s.slip_edges.end(), std::greater_equal<>()) != s.slip_edges.end())
+      throw InputError(path + ": dataset '/bins/slip_edges' holds " + std::to_string(s.slip_edges.size()) +
+                       " edges, expected at least two, strictly increasing");
+  }
   s.run_mean_solids_fraction = read_doubles(f, "/runs/mean_solids_fraction", {kAnyExtent}, Finite::Everywhere);
   const std::uint64_t nr = s.run_mean_solids_fraction.size();
   s.run_paths = f.has_attr(kRuns, "paths") ? f.attr_strings(kRuns, "paths") : std::vector<std::string>{};
@@ -340,8 +392,47 @@ Grid read_grid_attributes(const h5::File& f, const std::string& g, std::int64_t 
   return c;
 }
 
+/// `drift/` of a grid group: the totals of shape (n_bins, n_slip), count int64 >= 0, the sums finite; per_snapshot/
+/// (where present) of shape (n_snapshots, n_bins, n_slip), its count summing to the totals'.
+Drift read_drift(const h5::File& f, const std::string& g, std::uint64_t ns, std::uint64_t nb, std::uint64_t n_slip) {
+  const std::string& path = f.path();
+  const std::string dg = g + "/drift";
+  if (n_slip == 0)
+    throw InputError(path + ": group '" + dg + "' is present but '/bins/slip_edges' is not (the slip bins of its sums)");
+  Drift d;
+  if (f.has_attr(dg, "out_of_range")) d.out_of_range = f.attr_int(dg, "out_of_range");
+  const std::string shape = "(n_bins, n_slip) = (" + std::to_string(nb) + ", " + std::to_string(n_slip) + ")";
+  d.count = read_ints(f, dg + "/count", {nb, n_slip}, shape);
+  for (std::size_t k = 0; k < d.count.size(); ++k)
+    if (d.count[k] < 0)
+      throw InputError(path + ": dataset '" + dg + "/count' holds " + std::to_string(d.count[k]) + ", expected counts >= 0");
+  for (const DriftNumber& n : kDriftNumbers)
+    if (n.finite == Finite::Everywhere || f.exists(dg + "/" + n.name))
+      d.*n.member = read_doubles(f, dg + "/" + n.name, {nb, n_slip}, n.finite, shape);
+  const std::string ps = dg + "/per_snapshot";
+  if (f.exists(ps + "/count")) {
+    Drift::PerSnapshot p;
+    const std::string pshape = "(n_snapshots, n_bins, n_slip) = (" + std::to_string(ns) + ", " + std::to_string(nb) +
+                               ", " + std::to_string(n_slip) + ")";
+    p.count = read_ints(f, ps + "/count", {ns, nb, n_slip}, pshape);
+    p.numerator = read_doubles(f, ps + "/numerator", {ns, nb, n_slip}, Finite::Everywhere, pshape);
+    p.denominator = read_doubles(f, ps + "/denominator", {ns, nb, n_slip}, Finite::Everywhere, pshape);
+    const std::size_t cells = static_cast<std::size_t>(nb * n_slip);
+    for (std::size_t c = 0; c < cells; ++c) {
+      std::int64_t sum = 0;
+      for (std::size_t k = 0; k < ns; ++k) sum += p.count[k * cells + c];
+      if (sum != d.count[c])
+        throw InputError(path + ": dataset '" + ps + "/count' sums to " + std::to_string(sum) + " samples in (phi bin " +
+                         std::to_string(c / n_slip) + ", slip bin " + std::to_string(c % n_slip) + "), expected " +
+                         std::to_string(d.count[c]) + " (" + dg + "/count)");
+    }
+    d.per_snapshot = std::move(p);
+  }
+  return d;
+}
+
 Group read_group(const h5::File& f, const std::string& g, FilterKind kind, std::int64_t version, bool per_snapshot, std::uint64_t ns,
-                 std::uint64_t nb) {
+                 std::uint64_t nb, std::uint64_t n_slip) {
   const std::string& path = f.path();
   Group w;
   w.kind = kind;
@@ -382,6 +473,7 @@ Group read_group(const h5::File& f, const std::string& g, FilterKind kind, std::
     }
     w.per_snapshot = std::move(p);
   }
+  if (kind == FilterKind::Grid && f.exists(g + "/drift")) w.drift = read_drift(f, g, ns, nb, n_slip);
   if (f.exists(g + "/samples")) {
     Samples s;
     const std::string sg = g + "/samples";
@@ -445,7 +537,7 @@ void write_filtered(const std::string& path, const Scene* scene, const Filtered&
       f.set_attr(kGrids, "definition", std::string(kGridsDefinition));
     }
     for (std::size_t i = 0; i < s.groups.size(); ++i)
-      write_group(f, paths[i], s.groups[i], s.snapshot_run_index.size(), s.bins());
+      write_group(f, paths[i], s.groups[i], s.snapshot_run_index.size(), s.bins(), s.slip_bins());
   });
 }
 
@@ -473,7 +565,8 @@ Filtered read_filtered(const std::string& path) {
   }
   // the per-snapshot sums are in every group or in none (the first decides)
   const bool per_snapshot = !groups.empty() && f.exists(groups.front().first + "/per_snapshot/numerator");
-  for (const auto& [g, kind] : groups) s.groups.push_back(read_group(f, g, kind, s.version, per_snapshot, ns, nb));
+  for (const auto& [g, kind] : groups)
+    s.groups.push_back(read_group(f, g, kind, s.version, per_snapshot, ns, nb, s.slip_bins()));
   for (const FilteredGroup& g : s.groups)
     if (g.kind == FilterKind::Grid && g.grid && g.grid->cells_across <= 0)
       throw InputError(path + ": attribute 'cells_across' of a grid group is " + std::to_string(g.grid->cells_across) +

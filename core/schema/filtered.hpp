@@ -56,6 +56,21 @@ struct FilteredGroup {
   };
   std::optional<PerSnapshot> per_snapshot;
 
+  /// `drift/` of a grid group (cgd-filter --grids; absent in files written before it): the drift-velocity closure's
+  /// sums per (phi bin, s_hat bin), shape (n_bins, n_slip) row-major (docs/schema-filtered.md "/grids/<N>/drift").
+  struct Drift {
+    std::int64_t out_of_range = 0;  // samples with phi in the bins but s_hat beyond /bins/slip_edges
+    std::vector<std::int64_t> count;
+    std::vector<double> numerator, denominator, magnitude;  // sum (M - N), sum beta s~_y, sum beta |s~|
+    std::vector<double> phi_mean, slip_mean, H, H_stderr;   // NaN where empty (H: also where denominator = 0)
+    struct PerSnapshot {  // (n_snapshots, n_bins, n_slip)
+      std::vector<std::int64_t> count;
+      std::vector<double> numerator, denominator;
+    };
+    std::optional<PerSnapshot> per_snapshot;
+  };
+  std::optional<Drift> drift;
+
   /// `samples/` (cgd-filter --samples): per-particle records; slip and grad_p_filtered (n, 3).
   struct Samples {
     std::vector<double> phi, slip, grad_p_filtered, numerator, beta_micro;
@@ -87,6 +102,8 @@ struct Filtered {
   std::vector<double> snapshot_time_s;
 
   std::vector<double> phi_edges;  // /bins/phi_edges, n_bins + 1, strictly increasing
+  std::vector<double> slip_edges; // /bins/slip_edges (u_t), n_slip + 1, strictly increasing; empty: no drift sums
+  std::size_t slip_bins() const { return slip_edges.empty() ? 0 : slip_edges.size() - 1; }
 
   /// The box widths in file order, then the whole box (if any), then the grids (cells across descending).
   std::vector<FilteredGroup> groups;

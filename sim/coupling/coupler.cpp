@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <type_traits>
 
 #include "core/error.hpp"
 
@@ -19,6 +20,23 @@ Coupler::Coupler(const CouplerSettings& settings, const fluid::FluidGrid& grid) 
   for (int d = 0; d < 3; ++d) bv_[d] = grid.make_field();
   cells_.assign(kRead * grid.storage_size(), 0.0);
   deposit_.assign(kDeposit * grid.storage_size(), 0.0);
+  drift_ = settings.drag == DragLaw::Drift;
+  if (drift_) {  // allocated only for the law that uses them
+    drift_mass_ = grid.make_field();
+    for (int d = 0; d < 3; ++d) drift_mv_[d] = grid.make_field();
+    drift_cells_.assign(3 * grid.storage_size(), 0.0);
+  }
+}
+
+void Coupler::drift_cell_velocity() {
+  const fluid::FluidGrid& g = grid_;
+  const std::size_t first = g.first_owned(), last = first + g.owned_size();
+  for (std::size_t c = first; c < last; ++c) {
+    const double m = drift_mass_[c];
+    double* out = &drift_cells_[3 * c];
+    for (int d = 0; d < 3; ++d) out[d] = m > 0 ? drift_mv_[d][c] / m : cells_[kRead * c + d];  // empty: u_c, no slip
+  }
+  exchange_interleaved_ghosts(g.comm(), view_, drift_cells_.data(), 3);
 }
 
 void Coupler::cell_fields(const fluid::FluidState& state, bool with_phi) {
@@ -61,6 +79,18 @@ void Coupler::compute_drag(const dem::Particles& p, fluid::FluidState& state) {
     for_each_stencil_cell(view_, stencil_[i], [&](std::size_t c, double w) { phi_[c] += per_cell * w; });
   }
   accumulate_ghosts(g.comm(), view_, {phi_.data()});
+  if (drift_) {  // the cells' mean particle velocity: the same weights, the same particle order as phi
+    for (int d = 0; d < 3; ++d) std::fill(drift_mv_[d].begin(), drift_mv_[d].end(), 0.0);
+    for (std::size_t i = 0; i < n; ++i) {
+      const double* v = &p.v[3 * i];
+      for_each_stencil_cell(view_, stencil_[i], [&](std::size_t c, double w) {
+        const double pw = per_cell * w;
+        for (int d = 0; d < 3; ++d) drift_mv_[d][c] += pw * v[d];
+      });
+    }
+    accumulate_ghosts(g.comm(), view_, {drift_mv_[0].data(), drift_mv_[1].data(), drift_mv_[2].data()});
+    drift_mass_ = phi_;  // the raw deposit sum_p V_p w_pc / V_cell, before the floor changes phi_
+  }
   // void fraction with a conservative floor
   const std::size_t first = g.first_owned(), last = first + g.owned_size();
   double excess = 0, room = 0, local_max = 0;
@@ -95,6 +125,11 @@ void Coupler::compute_drag(const dem::Particles& p, fluid::FluidState& state) {
   // 2. fluid at the particles (u, grad p, phi in one pass over the stencil), drag coefficients, and
   // their deposit B, B V
   cell_fields(state, true);
+  if (drift_) {
+    drift_cell_velocity();
+    pc_.drift_shift.assign(3 * n, 0.0);
+    pc_.cell_slip.assign(3 * n, 0.0);
+  }
   pc_.beta.assign(n, 0.0);
   pc_.fluid_velocity.assign(3 * n, 0.0);
   pc_.pressure_gradient.assign(3 * n, 0.0);
@@ -102,6 +137,7 @@ void Coupler::compute_drag(const dem::Particles& p, fluid::FluidState& state) {
   const double* cf = cells_.data();
   double* dep = deposit_.data();
   visit_any_drag_law(s_.drag, s_.drag_params, s_.filtered, [&](const auto& law) {
+    constexpr bool kDrift = is_drift_drag<std::decay_t<decltype(law)>>;
     for (std::size_t i = 0; i < n; ++i) {
       // all kRead values of a cell at once (vectorised; each sum in the kernel's cell order)
       alignas(64) double acc[kRead] = {0, 0, 0, 0, 0, 0, 0, 0};
@@ -126,9 +162,29 @@ void Coupler::compute_drag(const dem::Particles& p, fluid::FluidState& state) {
       }
       const double beta = law.beta_p(phi_p, std::sqrt(slip2));
       pc_.beta[i] = beta;
+      double src[kDeposit] = {1.0, v[0], v[1], v[2]};  // bww * 1.0 == bww exactly
+      if constexpr (kDrift) {
+        // the cell slip s~ = u_p - vbar_p and the shift d = H(phi_p, |s~|/u_t) s~: the particle is driven as if its
+        // velocity were v + d (the deposit below and compute_particle_forces)
+        double vbar[3] = {0, 0, 0};
+        for_each_stencil_cell(view_, stencil_[i], [&](std::size_t c, double w) {
+          const double* q = &drift_cells_[3 * c];
+          for (int d = 0; d < 3; ++d) vbar[d] += w * q[d];
+        });
+        double s[3], s2 = 0;
+        for (int d = 0; d < 3; ++d) {
+          s[d] = u[d] - vbar[d];
+          s2 += s[d] * s[d];
+        }
+        const double H = law.cell_slip_correction(phi_p, std::sqrt(s2));
+        for (int d = 0; d < 3; ++d) {
+          pc_.cell_slip[3 * i + d] = s[d];
+          pc_.drift_shift[3 * i + d] = H * s[d];
+          src[1 + d] = v[d] + H * s[d];
+        }
+      }
       if (!s_.two_way) continue;
       const double bw = beta * per_cell;
-      const double src[kDeposit] = {1.0, v[0], v[1], v[2]};  // bww * 1.0 == bww exactly
       for_each_stencil_cell(view_, stencil_[i], [&](std::size_t c, double w) {
         double* q = dep + kDeposit * c;
         const double bww = bw * w;
@@ -156,21 +212,31 @@ void Coupler::compute_particle_forces(dem::Particles& p, fluid::FluidState& stat
   cell_fields(state, false);
   const double inv_rho_p = s_.particle_volume_m3 / s_.particle_mass_kg * s_.parcel_volume_factor;  // V/m
   const double* cf = cells_.data();
-  for (std::size_t i = 0; i < p.n_owned; ++i) {
-    alignas(64) double acc[kRead] = {0, 0, 0, 0, 0, 0, 0, 0};
-    for_each_stencil_cell(view_, stencil_[i], [&](std::size_t c, double w) {
-      const double* q = cf + kRead * c;
-      for (int m = 0; m < kRead; ++m) acc[m] += w * q[m];
-    });
-    const double* u = acc;
-    const double* gp = acc + 3;
-    const double beta_over_rho = pc_.beta[i] * inv_rho_p;
-    for (int d = 0; d < 3; ++d) {
-      double a = beta_over_rho * (u[d] - p.v[3 * i + d]) + s_.particle_body_accel[d];
-      if (s_.pressure_gradient_force) a -= inv_rho_p * gp[d];
-      p.a_ext[3 * i + d] = a;
+  // the drift law's particle velocity is shifted by d_p (compute_drag); every other law's loop is the plain one
+  auto forces = [&](auto drift) {
+    constexpr bool kDrift = decltype(drift)::value;
+    for (std::size_t i = 0; i < p.n_owned; ++i) {
+      alignas(64) double acc[kRead] = {0, 0, 0, 0, 0, 0, 0, 0};
+      for_each_stencil_cell(view_, stencil_[i], [&](std::size_t c, double w) {
+        const double* q = cf + kRead * c;
+        for (int m = 0; m < kRead; ++m) acc[m] += w * q[m];
+      });
+      const double* u = acc;
+      const double* gp = acc + 3;
+      const double beta_over_rho = pc_.beta[i] * inv_rho_p;
+      for (int d = 0; d < 3; ++d) {
+        double a;
+        if constexpr (kDrift)
+          a = beta_over_rho * (u[d] - (p.v[3 * i + d] + pc_.drift_shift[3 * i + d])) + s_.particle_body_accel[d];
+        else
+          a = beta_over_rho * (u[d] - p.v[3 * i + d]) + s_.particle_body_accel[d];
+        if (s_.pressure_gradient_force) a -= inv_rho_p * gp[d];
+        p.a_ext[3 * i + d] = a;
+      }
     }
-  }
+  };
+  if (drift_) forces(std::true_type{});
+  else forces(std::false_type{});
 }
 
 }  // namespace cgd::coupling

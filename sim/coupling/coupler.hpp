@@ -25,6 +25,15 @@
 // and so are the ones it deposits (B, B V), so steps 2 and 4 are one pass each over the particles. The
 // sums are the same, in the same order, as with one field at a time: the results are bit for bit those
 // of the kernel evaluated per field.
+// The drift-velocity law (fluid.drag = "drift", core/drag.hpp above the law table; docs/closure.md "The
+// drift-velocity closure"), and only it, adds to step 1 the deposit of the particles' velocities with the same
+// weights and in the same order as phi, vbar_c = sum_p V_p w_pc v_p / sum_p V_p w_pc (a cell with no deposit: its
+// cell-centred u_c, i.e. zero slip), and to step 2 its interpolation vbar_p = sum_c w_pc vbar_c, the cell slip
+// s~_p = u_p - vbar_p and the shift d_p = H(phi_p, |s~_p|/u_t) s~_p (s~_p frozen at the deposit). The particle then
+// moves as under the micro law with v_p + d_p in place of v_p: the cells get B_c = sum_p beta_p V_p w_pc / V_cell and
+// B_c V_c = sum_p beta_p V_p (v_p + d_p) w_pc / V_cell, the particle a_p = beta_p V_p (u_p^{n+1} - v_p - d_p)/m + ...,
+// so the momentum argument below holds unchanged (d_p enters both sides with the same weights). With every other
+// law nothing of this is allocated or done, and their results are those of the code without it, bit for bit.
 // One-way coupling: steps 1-2 still give eps and the particle drag, but the fluid is solved as a pure
 // fluid (B = 0 and eps = 1 in its equations: a fluid that gets out of the particles' way without being
 // pushed develops a growing displacement flow), with hydrostatic driving (G = rho_f g; sim/coupled_step.hpp
@@ -63,6 +72,10 @@ struct ParticleCoupling {
   std::vector<double> beta;              // beta_p,i, kg m^-3 s^-1
   std::vector<double> fluid_velocity;    // u at the particle, 3 per particle
   std::vector<double> pressure_gradient; // grad p at the particle (mean removed), 3 per particle
+  // drift law only (empty otherwise): d_p = H(phi_p, |s~_p|/u_t) s~_p, 3 per particle, m/s; the force is
+  // beta_p V_p (u_p - v_p - d_p), so beta is the micro law's coefficient
+  std::vector<double> drift_shift;
+  std::vector<double> cell_slip;         // drift law only: s~_p = u_p - vbar_p, 3 per particle, m/s
 };
 
 class Coupler {
@@ -88,7 +101,13 @@ class Coupler {
   void cell_fields(const fluid::FluidState& state, bool with_phi);
   static constexpr int kRead = 8;  // u (3), grad p (3), phi, unused: one 64-byte line per cell
   static constexpr int kDeposit = 4;  // B, B V (3)
+  /// Drift law: the owned cells' mean particle velocity (or u_c where nothing is deposited) into drift_cells_
+  /// (3 per cell, interleaved), then its ghost rows. After cell_fields(state, true). Collective.
+  void drift_cell_velocity();
   CouplerSettings s_;
+  bool drift_ = false;             // fluid.drag = "drift": the cell-mean velocity deposit below is used
+  std::vector<double> drift_mass_, drift_mv_[3];  // drift only: sum V w / V_cell (raw) and sum V w v / V_cell
+  std::vector<double> drift_cells_;               // drift only: vbar_c, 3 per cell
   const fluid::FluidGrid& grid_;
   GridView view_;
   std::vector<double> phi_, bv_[3];

@@ -3,7 +3,10 @@
 #  * the whole-box filter reproduces the series' domain slip of the same snapshot (1e-12 relative:
 #    the snapshot's eps_velocity sums to the solver's face sum exactly, only summation order differs);
 #  * a homogeneous (unclustered) suspension gives |H| < 0.03 in the bulk bins at every width (see below);
-#  * 1 and 2 ranks write the same file bit for bit (every dataset and every attribute but 'created');
+#  * 1 and 2 ranks write the same file bit for bit (every dataset and every attribute but 'created'; the grids'
+#    drift sums included);
+#  * the drift-velocity closure's table (cgd-fit --drift-table) is N/S of the filter's drift sums, a coarse run uses
+#    it (fluid.drag = "drift"), --model and cgd-export refuse it;
 #  * bad input: exit 2, a message naming the file or option, nothing written;
 #  * a run without a DONE marker is filtered with a warning.
 # Environment (set by CTest): CGD_SOURCE_DIR, CGD_BINARY_DIR.
@@ -93,6 +96,51 @@ print(f"ok   perfect-closure table of the 4-across grid ({ok.sum()} points)")
 PY
 fi
 
+# ---- the drift-velocity closure (issue 28): the filter's drift sums of the 4-across grid, cgd-fit --drift-table 4
+# (H = numerator / denominator in every measured bin), a coarse run with fluid.drag = "drift" on that grid, and the
+# refusals: the table with fluid.drag = "model" (cgd-coarse --model) and cgd-export, exit 2.
+coarse=$binary_dir/cgd-coarse
+export_tool=$binary_dir/cgd-export
+if [ -x "$fit" ] && [ -x "$coarse" ]; then
+  "$fit" "$tmp/a.h5" --drift-table 4 -o "$tmp/drift.h5" >"$tmp/drift.out" 2>&1 || fail "cgd-fit --drift-table: $(cat "$tmp/drift.out")"
+  "$py" - "$tmp/a.h5" "$tmp/drift.h5" <<'PY' || fail "drift table model"
+import sys, h5py, numpy as np
+a, m = h5py.File(sys.argv[1]), h5py.File(sys.argv[2])
+assert m.attrs["curves"] == "drift_table" and m.attrs["operator"] == "grid" and m.attrs["table_cells_across"] == 4
+d, t = a["grids/4/drift"], m["drift_table"]
+edges_phi, edges_slip = a["bins/phi_edges"][:], a["bins/slip_edges"][:]
+assert np.array_equal(d["per_snapshot/count"][:].sum(axis=0), d["count"][:])
+measured = 0
+for i, phi in enumerate(t["phi"][:]):
+    b = int(np.floor(phi / (edges_phi[1] - edges_phi[0])))
+    for j, s in enumerate(t["slip"][:]):
+        k = int(np.floor(s / (edges_slip[1] - edges_slip[0])))
+        if t["filled"][i, j] == 0:
+            measured += 1
+            assert abs(t["H"][i, j] - d["numerator"][b, k] / d["denominator"][b, k]) < 1e-12, (i, j)
+            assert d["count"][b, k] >= 100
+assert measured > 0
+print(f"ok   drift table of the 4-across grid: {t['H'].shape[0]} x {t['H'].shape[1]}, {measured} measured bins = N/S")
+PY
+  "$coarse" "$scene" --set 'domain.size_dp=[20,80,20]' --set fluid.dx_over_dp=5 --set particles.parcel_size=2 \
+    --set run.end_time_tref=1.2 --set run.sampling_start_tref=0.6 --set fluid.drag='"drift"' \
+    --set fluid.drag_model="\"$tmp/drift.h5\"" --quiet -o "$tmp/coarse_drift" >"$tmp/coarse.out" 2>&1 \
+    && [ -f "$tmp/coarse_drift/summary.h5" ] && echo "ok   coarse run with the drift law" \
+    || fail "coarse run with the drift law: $(tail -n 5 "$tmp/coarse.out")"
+  "$coarse" "$scene" --set 'domain.size_dp=[20,80,20]' --set fluid.dx_over_dp=5 --model "$tmp/drift.h5" --quiet \
+    -o "$tmp/coarse_model" >"$tmp/coarse_model.out" 2>&1
+  status=$?
+  { [ $status -eq 2 ] && grep -qF 'is a drift table' "$tmp/coarse_model.out" && [ ! -e "$tmp/coarse_model" ]; } \
+    && echo "ok   --model refuses a drift table: $(head -n 1 "$tmp/coarse_model.out")" \
+    || fail "--model with a drift table: status $status, $(cat "$tmp/coarse_model.out")"
+  if [ -x "$export_tool" ]; then
+    "$export_tool" "$tmp/drift.h5" -o "$tmp/export_drift" >"$tmp/export.out" 2>&1
+    status=$?
+    { [ $status -eq 2 ] && grep -qF 'drift table' "$tmp/export.out"; } && echo "ok   cgd-export refuses a drift table" \
+      || fail "cgd-export with a drift table: status $status, $(cat "$tmp/export.out")"
+  fi
+fi
+
 # ---- two runs pooled, 1 rank vs 2 ranks: the same file --------------------------------------------
 "$filter" "$tmp/runA" "$tmp/runB" --samples 20 --grids 3,4 --quiet -o "$tmp/np1.h5" || fail "filter 2 runs np1"
 "${mpirun_cmd[@]}" -np 2 "$filter" "$tmp/runA" "$tmp/runB" --samples 20 --grids 3,4 --quiet -o "$tmp/np2.h5" || fail "filter 2 runs np2"
@@ -146,6 +194,7 @@ expect_bad output_exists "exists" -- "$tmp/runA" -o "$tmp/exists.h5"
 expect_bad bad_bins "--bins" -- "$tmp/runA" --bins 0 -o "$tmp/bad.h5"
 expect_bad grid_finer_than_run "finer than the run's own" -- "$tmp/runA" --grids 7 -o "$tmp/bad.h5"
 expect_bad grid_not_whole "--grids" -- "$tmp/runA" --grids 2.5 -o "$tmp/bad.h5"
+expect_bad slip_bins "--slip-bins" -- "$tmp/runA" --grids 4 --slip-bins 0 -o "$tmp/bad.h5"
 expect_bad from_too_late "no snapshot at or after" -- "$tmp/runA" --from-tref 99 -o "$tmp/bad.h5"
 "${mpirun_cmd[@]}" -np 2 "$filter" "$tmp/trunc" -o "$tmp/bad.h5" >/dev/null 2>"$tmp/err"
 [ $? -eq 2 ] && [ ! -e "$tmp/bad.h5" ] && echo "ok   truncated file at 2 ranks: exit 2" || fail "truncated at 2 ranks"

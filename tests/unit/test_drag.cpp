@@ -192,7 +192,7 @@ TEST(DragTable, NamesRoundTripAndKindsAreConsistent) {
   }
   EXPECT_FALSE(cgd::drag_law_from_name("ergun").has_value());
   EXPECT_EQ(cgd::drag_law_names(cgd::DragKind::Micro), "\"beetstra\", \"wen-yu\", \"stokes\"");
-  EXPECT_EQ(cgd::drag_law_names(cgd::DragKind::Filtered), "\"radl2014\", \"model\"");
+  EXPECT_EQ(cgd::drag_law_names(cgd::DragKind::Filtered), "\"radl2014\", \"model\", \"drift\"");
 }
 
 TEST(DragTable, EveryLawIsInTheDocs) {

@@ -674,7 +674,7 @@ TEST(DragModelSchema, RefusesDamagedFilesNamingTheFileAndTheKey) {
       // version 1's spelling in a version-2 file: refused (the upgrade path is for version-1 files only)
       {"old_operator", attribute_as_text("/", "operator", "tsc-grid"), "operator",
        "\"box\" or \"grid\" (cgd_format_version 2)"},
-      {"curves", attribute_as_text("/", "curves", "lines"), "curves", "\"splines\" or \"table\""},
+      {"curves", attribute_as_text("/", "curves", "lines"), "curves", "\"splines\", \"table\" or \"drift_table\""},
       {"u_t", attribute_as_text("/", "u_t_convention", "stokes"), "u_t_convention", "schiller-naumann"},
       {"order", attribute_number("/h", "order", 4.0), "order", "integer"},
       {"runs_phi", removed_attribute_values("/c_corr", "runs_phi", {0.05}), "runs_phi", "one per entry of 'runs'"},

@@ -319,5 +319,181 @@ TEST(CoarseGridOperator, UniformFieldsOnAUniformLatticeGiveTheResolvedSlipAndHZe
   }
 }
 
+
+// ---- the drift-velocity closure's sums (cgd-filter --grids; docs/closure.md "The drift-velocity closure") ---------
+
+/// Every cell's TSC weight of a point x on the periodic grid g, dense (file order), from bspline2 and the periodic
+/// images: independent of core/tsc_kernel.hpp and core/tsc_grid.hpp.
+std::vector<double> dense_weights(const PeriodicGrid& g, const double* x) {
+  std::vector<double> axis[3];
+  for (int a = 0; a < 3; ++a) {
+    const int n = g.cells[a];
+    axis[a].assign(static_cast<std::size_t>(n), 0.0);
+    const double s = x[a] / g.spacing_m[a];
+    for (int c = 0; c < n; ++c)
+      for (int k = -2; k <= 2; ++k) axis[a][static_cast<std::size_t>(c)] += bspline2(s - (c + 0.5) - k * n);
+  }
+  std::vector<double> w(g.cell_count());
+  for (int k = 0; k < g.cells[2]; ++k)
+    for (int j = 0; j < g.cells[1]; ++j)
+      for (int i = 0; i < g.cells[0]; ++i)
+        w[g.index(i, j, k)] = axis[0][static_cast<std::size_t>(i)] * axis[1][static_cast<std::size_t>(j)] *
+                              axis[2][static_cast<std::size_t>(k)];
+  return w;
+}
+
+// Two particles in cell (1, 1, 1) of a 4^3 grid, A at its centre, B a quarter cell further along x (the case of
+// tests/unit/test_drift.cpp DriftCoupler.CellMeanVelocityAndForceOfTwoParticlesInOneCellByHand): per axis the
+// weights on cells 0, 1, 2 are aA = (1/8, 3/4, 1/8) and, along x for B, aB = (1/32, 11/16, 9/32); the y, z weights
+// cancel in the mean, so every cell of column ix (iy, iz in 0..2) holds (aA vA + aB vB)/(aA + aB); a cell the two
+// do not reach holds the grid's fluid velocity (zero cell slip there).
+TEST(DriftSums, CellMeanVelocityOfTwoParticlesByHand) {
+  const double h = 3e-4;
+  filter::CoarseGrid c;
+  c.cells_across = 4;
+  c.grid = grid_of(4, 4, 4, h);
+  schema::Snapshot s;
+  s.count = 2;
+  s.position = {1.5 * h, 1.5 * h, 1.5 * h, 1.75 * h, 1.5 * h, 1.5 * h};
+  s.velocity = {0.0, -0.1, 0.0, 0.02, -0.3, 0.01};
+  std::vector<double> fields(7 * c.grid.cell_count(), 0.0);
+  for (std::size_t k = 0; k < c.grid.cell_count(); ++k) fields[7 * k + 1] = 0.5, fields[7 * k + 2] = -0.25;
+  const std::vector<double> vbar = filter::coarse_cell_mean_velocity(s, c, fields);
+  const double aA[3] = {1.0 / 8, 3.0 / 4, 1.0 / 8}, aB[3] = {1.0 / 32, 11.0 / 16, 9.0 / 32};
+  for (int iz = 0; iz < 4; ++iz)
+    for (int iy = 0; iy < 4; ++iy)
+      for (int ix = 0; ix < 4; ++ix) {
+        const std::size_t cell = c.grid.index(ix, iy, iz);
+        const bool reached = ix < 3 && iy < 3 && iz < 3;
+        for (int d = 0; d < 3; ++d) {
+          const double expect = reached ? (aA[ix] * s.velocity[d] + aB[ix] * s.velocity[3 + d]) / (aA[ix] + aB[ix])
+                                        : fields[7 * cell + 1 + d];
+          EXPECT_NEAR(vbar[3 * cell + d], expect, 1e-15) << ix << " " << iy << " " << iz << " axis " << d;
+        }
+      }
+}
+
+// The drift sums of filter_snapshot against an independent sum over the particles: random particles with random
+// velocities in random fluid fields (coupled_snapshot), a 3 x 4 x 3 coarse grid; vbar deposited and every field
+// interpolated with dense_weights; per (phi bin, slip bin) the count, sum (M - N), sum beta s~_y, sum beta |s~| and
+// the sums of phi~ and s_hat (1e-12 relative). And the identity the table rests on: summed over the slip bins,
+// numerator = sum M - sum N of the grid's H_grid bin (nothing is out of the slip range here: slip bins to 20 u_t).
+TEST(DriftSums, MatchAnIndependentSumOverTheParticles) {
+  const PeriodicGrid g = grid_of(6, 8, 6, 2.5e-4);
+  std::mt19937 rng(17);
+  std::uniform_real_distribution<double> U(0, 1);
+  std::vector<double> x;
+  for (int i = 0; i < 6 * 8 * 6 * 4; ++i)
+    for (int a = 0; a < 3; ++a) x.push_back(U(rng) * g.edge_m(a));
+  schema::Snapshot s = coupled_snapshot(g, x, false, 5);
+  for (std::int64_t i = 0; i < s.count; ++i) s.velocity[3 * i] = 0.03 * (U(rng) - 0.5);  // velocities in x too
+  filter::FilterPlan plan = plan_with_grids(s, {{3, 4, 3}});
+  for (int m = 0; m <= 1000; ++m) plan.slip_edges.push_back(0.02 * m);
+  filter::FilterOptions o;
+  const filter::SnapshotResult res = filter::filter_snapshot(s, plan, o, 0, 0);
+  const std::size_t nb = plan.bin_edges.size() - 1, ns = plan.slip_bins();
+  ASSERT_EQ(res.drift.size(), nb * ns);
+  EXPECT_EQ(res.drift_out_of_range.at(0), 0);
+
+  const filter::CoarseGrid& cg = plan.runs[0].coarse[0];
+  const PeriodicGrid& G = cg.grid;
+  const double vp = std::numbers::pi / 6 * std::pow(75e-6, 3);
+  const std::vector<double> fields = filter::coarse_grid_fields(s, cg, vp);
+  std::vector<std::vector<double>> w(static_cast<std::size_t>(s.count));
+  std::vector<double> mass(G.cell_count(), 0.0), mv(3 * G.cell_count(), 0.0);
+  for (std::int64_t i = 0; i < s.count; ++i) {
+    w[static_cast<std::size_t>(i)] = dense_weights(G, &s.position[3 * i]);
+    for (std::size_t c = 0; c < G.cell_count(); ++c) {
+      mass[c] += w[static_cast<std::size_t>(i)][c];
+      for (int d = 0; d < 3; ++d) mv[3 * c + d] += w[static_cast<std::size_t>(i)][c] * s.velocity[3 * i + d];
+    }
+  }
+  const BeetstraDrag law(1.3, 1.8e-5, 75e-6);
+  const double u_t = plan.runs[0].physics.u_t_m_s;
+  std::vector<filter::DriftSums> expect(nb * ns);
+  std::vector<double> grid_micro(nb, 0.0), grid_numerator(nb, 0.0);
+  for (std::int64_t i = 0; i < s.count; ++i) {
+    const std::vector<double>& wi = w[static_cast<std::size_t>(i)];
+    double phi = 0, u[3] = {0, 0, 0}, gp[3] = {0, 0, 0}, vbar[3] = {0, 0, 0};
+    for (std::size_t c = 0; c < G.cell_count(); ++c) {
+      phi += wi[c] * fields[7 * c];
+      for (int d = 0; d < 3; ++d) {
+        u[d] += wi[c] * fields[7 * c + 1 + d];
+        gp[d] += wi[c] * fields[7 * c + 4 + d];
+        vbar[d] += wi[c] * (mass[c] > 0 ? mv[3 * c + d] / mass[c] : fields[7 * c + 1 + d]);
+      }
+    }
+    const double* v = &s.velocity[3 * i];
+    const double slip[3] = {u[0] - v[0], u[1] - v[1], u[2] - v[2]};
+    const double cell[3] = {u[0] - vbar[0], u[1] - vbar[1], u[2] - vbar[2]};
+    const double beta = law.beta_p(phi, std::hypot(slip[0], slip[1], slip[2]));
+    const double N = s.drag_coefficient[i] * (s.fluid_velocity[3 * i + 1] - v[1]) - s.pressure_gradient[3 * i + 1] + gp[1];
+    const double shat = std::hypot(cell[0], cell[1], cell[2]) / u_t;
+    const auto b = static_cast<std::size_t>(std::floor(phi / 0.01));
+    const auto m = static_cast<std::size_t>(std::floor(shat / 0.02));
+    ASSERT_LT(b, nb);
+    ASSERT_LT(m, ns);
+    filter::DriftSums& e = expect[b * ns + m];
+    e.count += 1;
+    e.numerator += beta * slip[1] - N;
+    e.denominator += beta * cell[1];
+    e.magnitude += beta * std::hypot(cell[0], cell[1], cell[2]);
+    e.phi += phi;
+    e.slip += shat;
+    grid_micro[b] += beta * slip[1];
+    grid_numerator[b] += N;
+  }
+  int bins = 0;
+  const std::size_t col = plan.whole_box_column() + 1;
+  for (std::size_t b = 0; b < nb; ++b) {
+    double num = 0;
+    for (std::size_t m = 0; m < ns; ++m) {
+      const filter::DriftSums &got = res.drift[b * ns + m], &want = expect[b * ns + m];
+      num += got.numerator;
+      EXPECT_EQ(got.count, want.count) << "bin " << b << ", " << m;
+      if (want.count == 0) continue;
+      ++bins;
+      const double scale = std::abs(want.magnitude) + 1e-300;
+      EXPECT_NEAR(got.numerator, want.numerator, 1e-11 * scale) << "bin " << b << ", " << m;
+      EXPECT_NEAR(got.denominator, want.denominator, 1e-11 * scale) << "bin " << b << ", " << m;
+      EXPECT_NEAR(got.magnitude, want.magnitude, 1e-11 * scale);
+      EXPECT_NEAR(got.phi, want.phi, 1e-12 * want.phi);
+      EXPECT_NEAR(got.slip, want.slip, 1e-11 * want.slip);
+    }
+    const filter::BinSums& bs = res.sums[col * nb + b];
+    EXPECT_NEAR(bs.micro, grid_micro[b], 1e-11 * (std::abs(grid_micro[b]) + 1));
+    EXPECT_NEAR(num, bs.micro - bs.numerator, 1e-11 * (std::abs(bs.micro) + std::abs(bs.numerator) + 1e-300)) << b;
+  }
+  EXPECT_GE(bins, 6);  // the sums spread over several (phi, slip) bins
+}
+
+// Every particle with the same velocity: vbar = v in every cell it reaches, the cell slip is the particle's slip,
+// so per phi bin the drift sums are those of H_grid: sum denominator = sum M, and numerator / denominator = H_grid.
+TEST(DriftSums, UniformParticleVelocitiesGiveHGrid) {
+  const PeriodicGrid g = grid_of(6, 8, 6, 2.5e-4);
+  std::mt19937 rng(23);
+  std::uniform_real_distribution<double> U(0, 1);
+  std::vector<double> x;
+  for (int i = 0; i < 6 * 8 * 6 * 4; ++i)
+    for (int a = 0; a < 3; ++a) x.push_back(U(rng) * g.edge_m(a));
+  schema::Snapshot s = coupled_snapshot(g, x, false, 7);
+  for (std::int64_t i = 0; i < s.count; ++i) s.velocity[3 * i] = 0.01, s.velocity[3 * i + 1] = -0.05, s.velocity[3 * i + 2] = 0;
+  filter::FilterPlan plan = plan_with_grids(s, {{3, 4, 3}});
+  for (int m = 0; m <= 300; ++m) plan.slip_edges.push_back(0.1 * m);
+  const filter::SnapshotResult res = filter::filter_snapshot(s, plan, filter::FilterOptions{}, 0, 0);
+  const std::size_t nb = plan.bin_edges.size() - 1, ns = plan.slip_bins(), col = plan.whole_box_column() + 1;
+  EXPECT_EQ(res.drift_out_of_range.at(0), 0);
+  int bins = 0;
+  for (std::size_t b = 0; b < nb; ++b) {
+    const filter::BinSums& bs = res.sums[col * nb + b];
+    if (bs.count == 0) continue;
+    double num = 0, den = 0;
+    for (std::size_t m = 0; m < ns; ++m) num += res.drift[b * ns + m].numerator, den += res.drift[b * ns + m].denominator;
+    EXPECT_NEAR(den, bs.micro, 1e-12 * std::abs(bs.micro)) << "bin " << b;
+    EXPECT_NEAR(num / den, 1.0 - bs.numerator / bs.micro, 1e-10) << "bin " << b;
+    ++bins;
+  }
+  EXPECT_GE(bins, 2);
+}
 }  // namespace
 }  // namespace cgd
