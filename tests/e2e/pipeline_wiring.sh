@@ -3,7 +3,7 @@
 # ..._s<seed> dirs with particles.seed), the extra resolved realisation (EXTRA_RESOLVED=0.05_s2: its run dir, params
 # string and --set particles.seed=2, pooled by the filter), FILTER_GRIDS -> cgd-filter --grids, FIT_ARGS with
 # --operator grid, the laws (radl2014: --set fluid.drag=radl2014; perfect: cgd-fit --grid-table, --model
-# perfect_c<cells>.h5, c_corr off for alpha > 1), the model alpha > 1 runs' reuse of their modelraw twins, the
+# perfect_c<cells>.h5, c_corr off for alpha > 1; drift: cgd-fit --drift-table, fluid.drag = drift), the model alpha > 1 runs' reuse of their modelraw twins, the
 # resolved summaries (cgd-coarse --summarise) feeding the study; and the refusals (make errors) of an unknown drag
 # label, an EXTRA_RESOLVED entry outside PHIS, a perfect closure on a grid the filter did not evaluate, a bad seed.
 # Environment (set by CTest): CGD_SOURCE_DIR.
@@ -36,6 +36,11 @@ grep -q "phi0.05_c4_a2_radl2014_s1 .*--set particles.parcel_size=2  --set fluid.
 grep -q "phi0.05_c4_a2_perfect_s2 .*--model $tmp/out/fit/perfect_c4.h5  --set fluid.parcel_correction=false" <<<"$n" &&
   grep -q "phi0.05_c8_a1_perfect_s1 .*--model $tmp/out/fit/perfect_c8.h5 " <<<"$n" &&
   ok "half: perfect runs with their grid's table (c_corr off for alpha > 1)" || fail "half: perfect command"
+nd=$(mk PROFILE=half COARSE_DRAGS=drift PARCEL_FIT=0 coarse)
+grep -q -- "cgd-fit $tmp/out/filter/filtered.h5 --drift-table 4 --force -o $tmp/out/fit/drift_c4.h5" <<<"$nd" &&
+  grep -q "phi0.05_c4_a2_drift_s2 .*--set fluid.drag=drift --set fluid.drag_model=$tmp/out/fit/drift_c4.h5 " <<<"$nd" &&
+  ! grep -q -- "--model $tmp/out/fit/drift_c4.h5" <<<"$nd" &&
+  ok "half: drift runs with their grid's drift table as fluid.drag_model (cgd-fit --drift-table)" || fail "half: drift command"
 grep -q "pipeline_reuse.py --identity $tmp/out/fit/model_parcels.h5; then .*--link $tmp/out/coarse/phi0.05_c4_a3_modelraw_s3 $tmp/out/coarse/phi0.05_c4_a3_model_s3 " <<<"$n" &&
   ok "half: model alpha > 1 runs reuse their modelraw twins when c_corr = 1" || fail "half: no reuse of the modelraw twin"
 grep -q "coarse/phi0.10_c4_a3_model_s1 .*--model $tmp/out/fit/model_parcels.h5" <<<"$n" &&
@@ -78,7 +83,7 @@ ok "make help lists SEEDS, ALPHA1_SEEDS, EXTRA_RESOLVED, FILTER_GRIDS, PARCEL_FI
 
 # ---- refusals: make errors naming what is allowed ----
 e=$(mk PROFILE=demo COARSE_DRAGS=micro,wen-yu all); s=$?
-[ $s -ne 0 ] && grep -q "'wen-yu' is not a drag label (allowed: micro model modelraw radl2014 perfect)" <<<"$e" &&
+[ $s -ne 0 ] && grep -q "'wen-yu' is not a drag label (allowed: micro model modelraw radl2014 perfect drift)" <<<"$e" &&
   ok "an unknown drag label is a make error listing the allowed ones" || fail "unknown drag label: status $s, $e"
 e=$(mk PROFILE=half EXTRA_RESOLVED=0.07_s2 all); s=$?
 [ $s -ne 0 ] && grep -q "EXTRA_RESOLVED entry '0.07_s2'" <<<"$e" && ok "EXTRA_RESOLVED outside PHIS refused" || fail "EXTRA_RESOLVED=0.07_s2: $s"
