@@ -319,22 +319,34 @@ std::string write_drift_table_model(const std::string& path, const std::vector<F
   for (std::size_t m = m_lo; m <= m_hi; ++m) t.slip.push_back(0.5 * (first.slip_edges[m] + first.slip_edges[m + 1]));
   const std::size_t nc = t.slip.size();
   std::size_t n_measured = 0, n_nearest = 0, n_phi_only = 0;
+  std::size_t n_beyond = 0;
   for (std::size_t b : rows) {
     const double phi_only = 1.0 - num[b] / mic[b];
     t.phi_only_H.push_back(phi_only);
+    std::size_t m_last = ns;  // the row's last measured slip bin (ns: none)
+    for (std::size_t m = 0; m < ns; ++m)
+      if (measured(b * ns + m)) m_last = m;
     for (std::size_t j = 0; j < nc; ++j) {
       const std::size_t m = m_lo + j, c = b * ns + m;
       double H = phi_only;
       std::int64_t filled = 2;
       if (measured(c)) {
         H = dnum[c] / dden[c], filled = 0;
+      } else if (m_last < ns && m > m_last) {
+        // faster than any measured cell of the row: no more reduction than the phi-only H of the row. H falls with
+        // the slip where it is measured; holding the last measured (slow-cell) H out to every slip gave the dense
+        // rows H ~ 1 at any slip, and a coarse run's cluster that reached them fell freely (slip 7.5 u_t;
+        // docs/closure.md "The drift-velocity closure")
+        const std::size_t cl = b * ns + m_last;
+        H = std::min(dnum[cl] / dden[cl], phi_only), filled = 3;
+        ++n_beyond;
       } else {  // the nearest measured slip bin of the row (the lower one on a tie)
         for (std::size_t dist = 1; dist < ns && filled == 2; ++dist) {
           if (m >= dist && measured(c - dist)) H = dnum[c - dist] / dden[c - dist], filled = 1;
           else if (m + dist < ns && measured(c + dist)) H = dnum[c + dist] / dden[c + dist], filled = 1;
         }
       }
-      (filled == 0 ? n_measured : filled == 1 ? n_nearest : n_phi_only) += 1;
+      if (filled < 3) (filled == 0 ? n_measured : filled == 1 ? n_nearest : n_phi_only) += 1;
       t.H.push_back(H);
       t.filled.push_back(filled);
       t.count.push_back(dcount[c]);
@@ -350,6 +362,7 @@ std::string write_drift_table_model(const std::string& path, const std::vector<F
   t.slip_bin_width = slip_w;
   t.fill_rule =
       "H = numerator/denominator where count >= min_count and |denominator| >= min_alignment x magnitude (filled = 0); "
+      "beyond the row's last such slip bin: the smaller of its H and the row's phi-only H_grid (filled = 3); "
       "else the H of the nearest such slip bin of the same phi row, the lower on a tie (filled = 1); a row with none: "
       "the row's phi-only H_grid = 1 - sum N / sum M of " + group + " (filled = 2). Rows: the phi bins with >= min_count "
       "samples of " + group + "; columns: the slip bins from the first to the last measured one";
@@ -393,7 +406,8 @@ std::string write_drift_table_model(const std::string& path, const std::vector<F
       << " file(s): " << t.phi.size() << " phi rows x " << nc << " slip columns (" << format("%.3g", t.slip.front())
       << " to " << format("%.3g", t.slip.back()) << " u_t); " << n_measured << " bins measured (>= " << min_count
       << " samples, |denominator| >= " << format("%.3g", min_alignment) << " x magnitude), " << n_nearest
-      << " filled from the nearest slip bin, " << n_phi_only << " from the row's phi-only H_grid\n"
+      << " filled from the nearest slip bin, " << n_beyond << " beyond the row's measured slips (min of the last "
+      << "measured H and the row's phi-only H_grid), " << n_phi_only << " from the row's phi-only H_grid\n"
       << "  H (phi rows, slip columns in u_t; * = filled)\n      phi  phi-only";
   for (double x : t.slip) out << format(" %6.2f ", x);
   out << "\n";

@@ -551,7 +551,7 @@ std::optional<Table> read_table(const h5::File& f) {
 
 /// `/drift_table`: required with curves = drift_table (and read only then). phi and slip finite, strictly
 /// increasing, at least one each; H finite of shape (len(phi), len(slip)), the sums of that shape, count and filled
-/// int64 of that shape (count >= 0, filled in {0, 1, 2}), phi_only_H of len(phi).
+/// int64 of that shape (count >= 0, filled in {0, 1, 2, 3}), phi_only_H of len(phi).
 std::optional<Drift> read_drift_table(const h5::File& f, const M& m) {
   if (m.curves != ModelCurves::DriftTable) return std::nullopt;
   require_group(f, kDriftTable);
@@ -575,7 +575,7 @@ std::optional<Drift> read_drift_table(const h5::File& f, const M& m) {
   for (std::size_t k = 0; k < t.count.size(); ++k) {
     if (t.count[k] < 0)
       refuse(f, "dataset '/drift_table/count' holds " + std::to_string(t.count[k]) + ", expected counts >= 0");
-    if (t.filled[k] < 0 || t.filled[k] > 2)
+    if (t.filled[k] < 0 || t.filled[k] > 3)
       refuse(f, "dataset '/drift_table/filled' holds " + std::to_string(t.filled[k]) +
                     ", expected 0 (measured), 1 (nearest slip bin) or 2 (phi-only H_grid)");
   }

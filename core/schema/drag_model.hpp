@@ -116,7 +116,7 @@ struct DragModelFile {
   struct DriftTable {  // `/drift_table` (curves = drift_table; docs/schema-drag-model.md)
     std::vector<double> phi, slip;                      // bin centres: phi (n_phi), s^ = |s~|/u_t (n_slip)
     std::vector<double> H, numerator, denominator, magnitude;  // (n_phi, n_slip); H finite, the sums pooled
-    std::vector<std::int64_t> count, filled;            // (n_phi, n_slip): samples; 0 measured, 1 nearest slip, 2 phi-only
+    std::vector<std::int64_t> count, filled;            // (n_phi, n_slip): samples; 0 measured, 1 nearest slip, 2 phi-only, 3 beyond
     std::vector<double> phi_only_H;                     // (n_phi): the phi-only H_grid of each row (the fallback)
     std::string source_group, fill_rule;
     std::int64_t min_count = 0;

@@ -535,14 +535,15 @@ TEST(DriftFit, TableIsNOverSWhereMeasuredAndFilledByTheRuleElsewhere) {
   EXPECT_NEAR(t.slip[0], 0.125, 1e-15);
   EXPECT_NEAR(t.slip[3], 0.875, 1e-15);
   const std::vector<double> expect = {0.2, 0.2, 0.2, 0.2,   // row 0: its phi-only H_grid 1 - 80/100
-                                      0.3, 0.3, 0.5, 0.5,   // row 1: misaligned slip 0 -> slip 1; empty slip 3 -> 2
+                                      0.3, 0.3, 0.5, 0.3,   // row 1: misaligned slip 0 -> slip 1; empty slip 3, beyond
+                                                            // the last measured: min(0.5, its phi-only 0.3)
                                       0.1, 0.1, 0.7, 0.7};  // row 2: slip 1 -> 0 (the lower on a tie... nearest), 2 -> 3
   ASSERT_EQ(t.H.size(), expect.size());
   for (std::size_t k = 0; k < expect.size(); ++k) EXPECT_NEAR(t.H[k], expect[k], 1e-14) << "entry " << k;
   const cgd::schema::DragModelFile raw = cgd::schema::read_drag_model(model);
   ASSERT_TRUE(raw.drift_table.has_value());
   EXPECT_EQ(raw.curves, cgd::schema::ModelCurves::DriftTable);
-  EXPECT_EQ(raw.drift_table->filled, (std::vector<std::int64_t>{2, 2, 2, 2, 1, 0, 0, 1, 0, 1, 1, 0}));
+  EXPECT_EQ(raw.drift_table->filled, (std::vector<std::int64_t>{2, 2, 2, 2, 1, 0, 0, 3, 0, 1, 1, 0}));
   EXPECT_EQ(raw.drift_table->count[4 * 2 + 3], 250);
   EXPECT_NEAR(raw.drift_table->phi_only_H[1], 0.3, 1e-14);
   // the law reads the table: at a bin centre its value, in between bilinear
