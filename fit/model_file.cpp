@@ -134,6 +134,31 @@ DragModelFile::Diagnostics diagnostics_of(const FitResult& R, const FitOptions& 
   return d;
 }
 
+/// The curves of a grid's table (--grid-table, and the fallback /h of a --drift-table file): h the
+/// piecewise-linear table H(phi) as an order-2 B-spline (knots = phi, coefficients = H), log a = -700 (a = 0:
+/// no width dependence), h_max 0.99, phi_crit the first phi, the grid operator of the grid of `cells_across`, and
+/// c_corr = 1 (a = 1, k = 0): the table is the grid's a-priori closure alone; what parcels miss is measured against
+/// it, not folded into it.
+DragModel grid_table_curves(const PhysicalSystem& physics, const std::vector<double>& phi, const std::vector<double>& H,
+                            int cells_across) {
+  DragModel M;
+  static_cast<PhysicalSystem&>(M) = physics;
+  M.h_spline.order = 2;
+  M.h_spline.knots.push_back(phi.front());
+  M.h_spline.knots.insert(M.h_spline.knots.end(), phi.begin(), phi.end());
+  M.h_spline.knots.push_back(phi.back());
+  M.h_spline.coefficients = H;
+  M.log_a_spline = M.h_spline;
+  M.log_a_spline.coefficients.assign(H.size(), -700.0);  // a = exp(-700) ~ 1e-304: 0 for any evaluator of the file
+  M.h_max = 0.99;
+  M.phi_crit = phi.front();
+  M.width_exponent = 1.0;
+  M.table_cells_across = cells_across;
+  M.calibration_operator = CalibrationOperator::Grid;
+  M.c_corr_a = 1.0, M.c_corr_k = 0.0, M.c_corr_source = "none";
+  return M;
+}
+
 }  // namespace
 
 void write_model_file(const std::string& path, const FitResult& R, const std::vector<FilteredFile>& files,
@@ -202,25 +227,9 @@ std::string write_grid_table_model(const std::string& path, const std::vector<Fi
     throw InputError(first.path + ": --grid-table " + std::to_string(cells_across) + ": " + std::to_string(phi.size()) +
                      " bin(s) of " + group + " have >= " + std::to_string(min_count) +
                      " samples; a table needs at least 2 (lower --min-count or filter longer runs)");
-  DragModel M;
-  static_cast<PhysicalSystem&>(M) = first.physics;
+  DragModel M = grid_table_curves(first.physics, phi, H, cells_across);
   const double delta = cell_over_dp * M.diameter_m;
-  M.h_spline.order = 2;
-  M.h_spline.knots.push_back(phi.front());
-  M.h_spline.knots.insert(M.h_spline.knots.end(), phi.begin(), phi.end());
-  M.h_spline.knots.push_back(phi.back());
-  M.h_spline.coefficients = H;
-  M.log_a_spline = M.h_spline;
-  M.log_a_spline.coefficients.assign(H.size(), -700.0);  // a = exp(-700) ~ 1e-304: 0 for any evaluator of the file
-  M.h_max = 0.99;
-  M.phi_crit = phi.front();
-  M.width_exponent = 1.0;
   M.table = true;
-  M.table_cells_across = cells_across;
-  M.calibration_operator = CalibrationOperator::Grid;
-  // c_corr = 1 (a = 1, k = 0): the table is the grid's a-priori closure alone; what parcels miss is measured
-  // against it, not folded into it
-  M.c_corr_a = 1.0, M.c_corr_k = 0.0, M.c_corr_source = "none";
   DragModelFile m = model_record(
       M,
       "beta_bar/beta_micro = c_corr(alpha) [1 - H_grid(phi)], H_grid the a-priori filtered drag "
@@ -367,23 +376,9 @@ std::string write_drift_table_model(const std::string& path, const std::vector<F
       "the row's phi-only H_grid = 1 - sum N / sum M of " + group + " (filled = 2). Rows: the phi bins with >= min_count "
       "samples of " + group + "; columns: the slip bins from the first to the last measured one";
 
-  DragModel M;
-  static_cast<PhysicalSystem&>(M) = first.physics;
+  // /h: the rows' phi-only H_grid (the fallback of the table, not used by the law)
+  DragModel M = grid_table_curves(first.physics, t.phi, t.phi_only_H, cells_across);
   const double delta = cell_over_dp * M.diameter_m;
-  // /h: the rows' phi-only H_grid as an order-2 B-spline (the fallback of the table, not used by the law)
-  M.h_spline.order = 2;
-  M.h_spline.knots.push_back(t.phi.front());
-  M.h_spline.knots.insert(M.h_spline.knots.end(), t.phi.begin(), t.phi.end());
-  M.h_spline.knots.push_back(t.phi.back());
-  M.h_spline.coefficients = t.phi_only_H;
-  M.log_a_spline = M.h_spline;
-  M.log_a_spline.coefficients.assign(t.phi.size(), -700.0);
-  M.h_max = 0.99;
-  M.phi_crit = t.phi.front();
-  M.width_exponent = 1.0;
-  M.table_cells_across = cells_across;
-  M.calibration_operator = CalibrationOperator::Grid;
-  M.c_corr_a = 1.0, M.c_corr_k = 0.0, M.c_corr_source = "none";
   DragModelFile m = model_record(
       M,
       "drift-velocity closure (fluid.drag = \"drift\"): F_i = V_i beta_micro(phi_i, |u_i - v_i|) [(u_i - v_i) - "
