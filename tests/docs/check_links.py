@@ -15,6 +15,7 @@ Exit status 0 when everything resolves, 1 otherwise (each problem on stderr as F
 import os
 import re
 import sys
+import unicodedata
 
 LINK = re.compile(r"!?\[(?:[^\[\]]|\[[^\]]*\])*\]\(\s*<?([^)\s>]+)>?(?:\s+\"[^\"]*\")?\s*\)")
 REFERENCE = re.compile(r"^\s{0,3}\[[^\]]+\]:\s*<?(\S+?)>?(?:\s+\"[^\"]*\")?\s*$")
@@ -28,7 +29,8 @@ def slug(text):
     text = text.replace("`", "")
     text = re.sub(r"<[^>]+>", "", text)  # inline HTML
     text = text.strip().lower()
-    text = "".join(c for c in text if c.isalnum() or c in " -_")
+    # github-slugger keeps letters, numbers and combining marks (the macron of φ̄ is U+0304, category Mn)
+    text = "".join(c for c in text if c.isalnum() or unicodedata.category(c).startswith("M") or c in " -_")
     return text.replace(" ", "-")
 
 
