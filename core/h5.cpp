@@ -184,8 +184,9 @@ std::vector<T> read_numeric_attribute(const File& file, const std::string& objec
   OpenAttribute a = open_attribute(file, object, name);
   const H5T_class_t cls = H5Tget_class(a.type.get());
   if (cls != H5T_INTEGER && cls != H5T_FLOAT)
-    throw_read(file.path(), describe(object, name) + " is " + (cls == H5T_STRING ? "a string" : "not a number") +
-                                ", expected " + (integer ? "an integer" : "a number"));
+    throw_read(file.path(), describe(object, name) + " is " +
+                                (cls == H5T_STRING ? "a string" : "not a number") + ", expected " +
+                                (integer ? "an integer" : "a number"));
   if (integer && cls != H5T_INTEGER)
     throw_read(file.path(), describe(object, name) + " is a floating-point number, expected an integer");
   std::vector<T> values(static_cast<std::size_t>(std::max<hssize_t>(a.points, 0)));
@@ -263,9 +264,30 @@ std::vector<hsize_t> dataset_dims(const Handle& ds) {
 
 /// Create `name` with `global_dims` (or open it if it already exists with those dims) and write this
 /// rank's hyperslab [offset, offset + count) from contiguous `local`. Collective.
+/// The dataset creation property list of `storage` for a dataset of `dims` and `element_bytes`: the default
+/// (contiguous) for Storage::Contiguous, for an empty or tiny dataset (under 256 values a chunk costs more
+/// than it saves) and where this HDF5 has no deflate filter; otherwise chunks of whole trailing rows of at
+/// most 1 MiB, byte shuffle, deflate level 4. Every rank computes the same list (the dataset's creation is
+/// collective).
+Handle creation_properties(Storage storage, const std::vector<hsize_t>& dims, std::size_t element_bytes) {
+  Handle dcpl(H5Pcreate(H5P_DATASET_CREATE), H5Pclose);
+  std::uint64_t values = 1;
+  for (hsize_t d : dims) values *= d;
+  if (storage == Storage::Contiguous || values < 256 || H5Zfilter_avail(H5Z_FILTER_DEFLATE) <= 0) return dcpl;
+  std::vector<hsize_t> chunk = dims;
+  const std::uint64_t row = values / dims[0];  // the values of one index of the first dimension
+  const std::uint64_t max_rows = std::max<std::uint64_t>(1, (std::uint64_t{1} << 20) / (row * element_bytes));
+  chunk[0] = std::min<hsize_t>(dims[0], max_rows);
+  H5Pset_chunk(dcpl.get(), static_cast<int>(chunk.size()), chunk.data());
+  H5Pset_shuffle(dcpl.get());
+  H5Pset_deflate(dcpl.get(), 4);
+  return dcpl;
+}
+
 void write_hyperslab(File& file, const std::string& name, hid_t mem_type, hid_t file_type,
                      const std::vector<std::uint64_t>& global_dims, const std::vector<std::uint64_t>& offset,
-                     const std::vector<std::uint64_t>& count, const void* local) {
+                     const std::vector<std::uint64_t>& count, const void* local,
+                     Storage storage = Storage::Contiguous) {
   const std::string path = normalise(name);
   const std::size_t rank = global_dims.size();
   bool bad = offset.size() != rank || count.size() != rank || rank == 0;
@@ -287,8 +309,9 @@ void write_hyperslab(File& file, const std::string& name, hid_t mem_type, hid_t 
     Handle lcpl(H5Pcreate(H5P_LINK_CREATE), H5Pclose);
     H5Pset_create_intermediate_group(lcpl.get(), 1);
     Handle space = simple_space(dims);
+    Handle dcpl = creation_properties(storage, dims, H5Tget_size(file_type));
     ds = Handle(
-        H5Dcreate2(file.id(), path.c_str(), file_type, space.get(), lcpl.get(), H5P_DEFAULT, H5P_DEFAULT),
+        H5Dcreate2(file.id(), path.c_str(), file_type, space.get(), lcpl.get(), dcpl.get(), H5P_DEFAULT),
         H5Dclose);
     if (!ds.valid()) throw_write(file.path(), "dataset '" + path + "' (create)");
   }
@@ -398,7 +421,8 @@ std::vector<T> read_rows_impl(const File& file, const std::string& name, std::in
 
 template <class T>
 void write_replicated_impl(File& file, const std::string& name, const std::vector<T>& data,
-                           const std::vector<std::uint64_t>& dims, hid_t mem_type, hid_t file_type) {
+                           const std::vector<std::uint64_t>& dims, hid_t mem_type, hid_t file_type,
+                           Storage storage) {
   if (any_rank(file.comm(), product(dims) != data.size()))
     throw RunError(file.path() + ": cannot write dataset '" + normalise(name) +
                    "': " + std::to_string(data.size()) + " values do not match its dimensions");
@@ -406,7 +430,7 @@ void write_replicated_impl(File& file, const std::string& name, const std::vecto
   MPI_Comm_rank(file.comm(), &rank);
   const std::vector<std::uint64_t> offset(dims.size(), 0);
   const std::vector<std::uint64_t> count = rank == 0 ? dims : std::vector<std::uint64_t>(dims.size(), 0);
-  write_hyperslab(file, name, mem_type, file_type, dims, offset, count, data.data());
+  write_hyperslab(file, name, mem_type, file_type, dims, offset, count, data.data(), storage);
 }
 
 }  // namespace
@@ -419,7 +443,8 @@ File File::create(const std::string& path, MPI_Comm comm, Seal seal) {
   H5Pset_fapl_mpio(fapl.get(), comm, MPI_INFO_NULL);
   H5Pset_coll_metadata_write(fapl.get(), 1);
   Handle fcpl(H5Pcreate(H5P_FILE_CREATE), H5Pclose);
-  if (seal == Seal::Yes) H5Pset_userblock(fcpl.get(), kSealBytes);  // room for the seal (write_atomically fills it)
+  if (seal == Seal::Yes)
+    H5Pset_userblock(fcpl.get(), kSealBytes);  // room for the seal (write_atomically fills it)
   const hid_t id = H5Fcreate(path.c_str(), H5F_ACC_TRUNC, fcpl.get(), fapl.get());
   if (id < 0) throw RunError(path + ": cannot create HDF5 file (" + hdf5_error_text() + ")");
   return File(id, path, comm);
@@ -478,7 +503,9 @@ File File::open_read(const std::string& path, MPI_Comm comm) {
 }
 
 File::File(File&& other) noexcept
-    : file_(std::exchange(other.file_, -1)), path_(std::move(other.path_)), comm_(other.comm_),
+    : file_(std::exchange(other.file_, -1)),
+      path_(std::move(other.path_)),
+      comm_(other.comm_),
       sealed_(other.sealed_) {}
 
 File& File::operator=(File&& other) noexcept {
@@ -644,12 +671,30 @@ std::vector<double> File::read_block(const std::string& dataset, const std::vect
 }
 
 void File::write_replicated(const std::string& dataset, const std::vector<double>& data,
-                            const std::vector<std::uint64_t>& dims) {
-  write_replicated_impl(*this, dataset, data, dims, H5T_NATIVE_DOUBLE, H5T_IEEE_F64LE);
+                            const std::vector<std::uint64_t>& dims, Storage storage) {
+  write_replicated_impl(*this, dataset, data, dims, H5T_NATIVE_DOUBLE, H5T_IEEE_F64LE, storage);
 }
 void File::write_replicated(const std::string& dataset, const std::vector<std::int64_t>& data,
-                            const std::vector<std::uint64_t>& dims) {
-  write_replicated_impl(*this, dataset, data, dims, H5T_NATIVE_INT64, H5T_STD_I64LE);
+                            const std::vector<std::uint64_t>& dims, Storage storage) {
+  write_replicated_impl(*this, dataset, data, dims, H5T_NATIVE_INT64, H5T_STD_I64LE, storage);
+}
+
+std::string File::storage_filter(const std::string& dataset) const {
+  Handle ds = open_dataset(*this, dataset);
+  Handle dcpl(H5Dget_create_plist(ds.get()), H5Pclose);
+  const int n = H5Pget_nfilters(dcpl.get());
+  std::string result = "none";
+  for (int i = 0; i < n; ++i) {
+    unsigned flags = 0, config = 0;
+    std::size_t n_values = 0;
+    const H5Z_filter_t id =
+        H5Pget_filter2(dcpl.get(), static_cast<unsigned>(i), &flags, &n_values, nullptr, 0, nullptr, &config);
+    if (id == H5Z_FILTER_DEFLATE)
+      result = "deflate";
+    else if (id != H5Z_FILTER_SHUFFLE)
+      return "other";
+  }
+  return result;
 }
 
 // ---- free functions
@@ -772,8 +817,9 @@ SealState check_seal(const std::string& path, std::string* problem) {
   char stored[17] = {};
   unsigned long long stored_bytes = 0;
   if (std::sscanf(block + magic, "%16[0-9a-f] bytes %llu", stored, &stored_bytes) != 2 || !user_block) {
-    if (problem) *problem = "its checksum seal (the first 512 bytes) is unreadable; expected \"" +
-                            std::string(kSealMagic) + "<16 hex digits> bytes <n>\" followed by the HDF5 file";
+    if (problem)
+      *problem = "its checksum seal (the first 512 bytes) is unreadable; expected \"" +
+                 std::string(kSealMagic) + "<16 hex digits> bytes <n>\" followed by the HDF5 file";
     return SealState::Damaged;
   }
   std::uint64_t bytes = 0;

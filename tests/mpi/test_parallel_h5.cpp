@@ -13,9 +13,9 @@
 
 #include "core/error.hpp"
 #include "core/h5.hpp"
+#include "core/scene.hpp"
 #include "core/schema/series.hpp"
 #include "core/schema/snapshot.hpp"
-#include "core/scene.hpp"
 
 namespace fs = std::filesystem;
 using cgd::h5::File;
@@ -108,6 +108,15 @@ TEST_F(ParallelH5, DistributedRowsComeBackInRankOrderIncludingRanksWithoutRows) 
   EXPECT_EQ(f.read_double("/b/position"), expect_b);
 }
 
+namespace {
+/// 400 values, mostly zero, the same on every rank.
+std::vector<double> full_table() {
+  std::vector<double> t(400, 0.0);
+  for (std::size_t i = 0; i < t.size(); i += 7) t[i] = 0.1 * static_cast<double>(i);
+  return t;
+}
+}  // namespace
+
 TEST_F(ParallelH5, YSlabBlocksFromEveryRankAssembleTheFullField) {
   const int rank = comm_rank(), size = comm_size();
   const int nx = 5, ny = 7, nz = 3;
@@ -124,6 +133,9 @@ TEST_F(ParallelH5, YSlabBlocksFromEveryRankAssembleTheFullField) {
     f.write_block("/fluid/velocity", local.empty() ? nullptr : local.data(), {nz, ny, nx, 3}, {0, uy0, 0, 0},
                   {nz, uyc, nx, 3});
     f.write_replicated("/table", std::vector<double>{1.0, 2.0, 3.0}, {3});
+    // a compressed table (the filtered file's sums): HDF5's parallel filtered write, collective, rank 0's
+    // copy
+    f.write_replicated("/packed", full_table(), {40, 10}, cgd::h5::Storage::Compressed);
     f.set_attr("/fluid", "layout", std::string("z, y, x"));
     f.close();
   }
@@ -137,6 +149,8 @@ TEST_F(ParallelH5, YSlabBlocksFromEveryRankAssembleTheFullField) {
   EXPECT_EQ(f.read_double("/fluid/velocity"), full);
   EXPECT_EQ(f.read_block("/fluid/velocity", {0, uy0, 0, 0}, {nz, uyc, nx, 3}), local);
   EXPECT_EQ(f.read_double("/table"), (std::vector<double>{1.0, 2.0, 3.0}));  // written once, not per rank
+  EXPECT_EQ(f.read_double("/packed"), full_table());
+  EXPECT_EQ(f.storage_filter("/packed"), "deflate");
   EXPECT_EQ(f.attr_string("/fluid", "layout"), "z, y, x");
 }
 

@@ -124,6 +124,52 @@ TEST_F(H5Test, RowsRoundTripAsFloat64AndInt64WithTheirShapes) {
   EXPECT_TRUE(f.read_rows_double("/particles/diameter", 5, 0).empty());
 }
 
+// Storage::Compressed is lossless and shrinks a table of mostly zeros (the filtered file's per-snapshot
+// sums); a table too small to gain (under 256 values) and an empty one stay contiguous, as does the default.
+TEST_F(H5Test, CompressedTablesReadBackBitForBitAndShrink) {
+  const std::uint64_t rows = 300, cols = 65;  // chunked in 1 MiB pieces: 300 x 65 x 8 B = 156 kB, one chunk
+  std::vector<double> sums(rows * cols, 0.0);
+  std::vector<std::int64_t> counts(rows * cols, 0);
+  for (std::uint64_t r = 0; r < rows; ++r)
+    for (std::uint64_t c = 10; c < 20; ++c) {  // a band of occupied bins, the rest empty
+      sums[r * cols + c] = 1.0 / (1.0 + static_cast<double>(r * c)) - 1e-300;
+      counts[r * cols + c] = static_cast<std::int64_t>(r + c);
+    }
+  const std::vector<double> small{1.5, -2.25, 3.0};
+  {
+    File f = File::create(path("packed.h5"), MPI_COMM_WORLD);
+    f.write_replicated("/t/sums", sums, {rows, cols}, cgd::h5::Storage::Compressed);
+    f.write_replicated("/t/counts", counts, {rows, cols}, cgd::h5::Storage::Compressed);
+    f.write_replicated("/t/plain", sums, {rows, cols});
+    f.write_replicated("/t/small", small, {3}, cgd::h5::Storage::Compressed);
+    f.write_replicated("/t/empty", std::vector<double>{}, {0, cols}, cgd::h5::Storage::Compressed);
+    f.close();
+  }
+  const File f = File::open_read(path("packed.h5"), MPI_COMM_WORLD);
+  EXPECT_EQ(f.read_double("/t/sums"), sums);  // bit for bit (operator== on doubles)
+  EXPECT_EQ(f.read_int("/t/counts"), counts);
+  EXPECT_EQ(f.read_double("/t/small"), small);
+  EXPECT_EQ(f.dims("/t/sums"), (std::vector<std::uint64_t>{rows, cols}));
+  EXPECT_EQ(f.dims("/t/empty"), (std::vector<std::uint64_t>{0, cols}));
+  EXPECT_EQ(f.read_rows_double("/t/sums", 7, 2),
+            std::vector<double>(sums.begin() + 7 * cols, sums.begin() + 9 * cols));
+  EXPECT_EQ(f.storage_filter("/t/sums"), "deflate");
+  EXPECT_EQ(f.storage_filter("/t/counts"), "deflate");
+  EXPECT_EQ(f.storage_filter("/t/plain"), "none");
+  EXPECT_EQ(f.storage_filter("/t/small"), "none");
+  EXPECT_EQ(f.storage_filter("/t/empty"), "none");
+  const auto stored = [&](const char* name) {
+    const hid_t ds = H5Dopen2(f.id(), name, H5P_DEFAULT);
+    const hsize_t bytes = H5Dget_storage_size(ds);
+    H5Dclose(ds);
+    return bytes;
+  };
+  // 85 % of the values are zero: deflate after shuffle keeps well under half (zlib on such runs of zero bytes
+  // reaches ~1/10; one half leaves room for any zlib version)
+  EXPECT_LT(stored("/t/sums"), stored("/t/plain") / 2);
+  EXPECT_EQ(stored("/t/plain"), rows * cols * sizeof(double));
+}
+
 TEST_F(H5Test, BlocksWrittenInPiecesAssembleAndReadBackAsSubBlocks) {
   // A (n_z, n_y, n_x, 3) = (2, 3, 4, 3) field written as two y-slabs into the same dataset.
   const std::vector<std::uint64_t> dims{2, 3, 4, 3};
@@ -246,10 +292,13 @@ TEST_F(H5Test, AtomicWriteLeavesOnlyTheCompleteFile) {
 // cut short, is an InputError.
 TEST_F(H5Test, SealedFileIsRefusedOnceAByteChangesOrItIsCutShort) {
   const std::string final_path = path("sealed.h5");
-  cgd::h5::write_atomically(final_path, MPI_COMM_WORLD, [&](File& f) {
-    const std::vector<double> x{1, 2, 3, 4};
-    f.write_replicated("/data", x, {4});
-  }, cgd::h5::Seal::Yes);
+  cgd::h5::write_atomically(
+      final_path, MPI_COMM_WORLD,
+      [&](File& f) {
+        const std::vector<double> x{1, 2, 3, 4};
+        f.write_replicated("/data", x, {4});
+      },
+      cgd::h5::Seal::Yes);
   EXPECT_TRUE(File::open_read(final_path, MPI_COMM_WORLD).sealed());
   std::string problem;
   EXPECT_EQ(cgd::h5::check_seal(final_path, &problem), cgd::h5::SealState::Valid) << problem;
@@ -263,8 +312,9 @@ TEST_F(H5Test, SealedFileIsRefusedOnceAByteChangesOrItIsCutShort) {
   }
   fs::copy_file(final_path, short_file);
   fs::resize_file(short_file, size - 100);
-  for (const auto& [file, expected] : {std::pair<std::string, std::string>{damaged, "do not match the checksum"},
-                                       {short_file, "cut short"}}) {
+  for (const auto& [file, expected] :
+       {std::pair<std::string, std::string>{damaged, "do not match the checksum"},
+        {short_file, "cut short"}}) {
     try {
       File::open_read(file, MPI_COMM_WORLD);
       ADD_FAILURE() << file << ": no InputError";
