@@ -31,7 +31,7 @@ small=(--set 'domain.size_dp=[20,80,20]' --set run.end_time_tref=1.5 --set run.d
 "$generate" "$scene" "${small[@]}" --set particles.solids_fraction=0.08 -o "$tmp/runB" >/dev/null 2>&1 || { fail "generate runB"; exit 1; }
 
 # ---- one run, one rank -----------------------------------------------------------------------------
-"$filter" "$tmp/runA" --from-tref 0.5 --samples 50 --grids 6,5,4,3 -o "$tmp/a.h5" >"$tmp/a.out" 2>"$tmp/a.err" || { cat "$tmp/a.err"; fail "filter runA"; }
+"$filter" "$tmp/runA" --from-tref 0.5 --samples 50 --grids 6,5,4,3 --drift-per-snapshot -o "$tmp/a.h5" >"$tmp/a.out" 2>"$tmp/a.err" || { cat "$tmp/a.err"; fail "filter runA"; }
 grep -q "^grid 3 across (3 x 12 x 3 cells" "$tmp/a.out" || fail "grid report: $(cat "$tmp/a.out")"
 "$py" - "$tmp/a.h5" "$tmp/runA/series.h5" <<'PY' || fail "whole-box slip / homogeneous H"
 import sys, h5py, numpy as np
