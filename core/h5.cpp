@@ -184,9 +184,8 @@ std::vector<T> read_numeric_attribute(const File& file, const std::string& objec
   OpenAttribute a = open_attribute(file, object, name);
   const H5T_class_t cls = H5Tget_class(a.type.get());
   if (cls != H5T_INTEGER && cls != H5T_FLOAT)
-    throw_read(file.path(), describe(object, name) + " is " +
-                                (cls == H5T_STRING ? "a string" : "not a number") + ", expected " +
-                                (integer ? "an integer" : "a number"));
+    throw_read(file.path(), describe(object, name) + " is " + (cls == H5T_STRING ? "a string" : "not a number") +
+                                ", expected " + (integer ? "an integer" : "a number"));
   if (integer && cls != H5T_INTEGER)
     throw_read(file.path(), describe(object, name) + " is a floating-point number, expected an integer");
   std::vector<T> values(static_cast<std::size_t>(std::max<hssize_t>(a.points, 0)));
@@ -262,19 +261,16 @@ std::vector<hsize_t> dataset_dims(const Handle& ds) {
   return dims;
 }
 
-/// Create `name` with `global_dims` (or open it if it already exists with those dims) and write this
-/// rank's hyperslab [offset, offset + count) from contiguous `local`. Collective.
 /// The dataset creation property list of `storage` for a dataset of `dims` and `element_bytes`: the default
 /// (contiguous) for Storage::Contiguous, for an empty or tiny dataset (under 256 values a chunk costs more
-/// than it saves) and where this HDF5 has no deflate filter; otherwise chunks of whole trailing rows of at
-/// most 1 MiB, byte shuffle, deflate level 4. Every rank computes the same list (the dataset's creation is
-/// collective).
-Handle creation_properties(Storage storage, const std::vector<hsize_t>& dims, std::size_t element_bytes) {
+/// than it saves) and where this HDF5 has no deflate filter; otherwise chunks of whole rows of the first
+/// dimension of at most 1 MiB, byte shuffle, deflate level 4. Every rank computes the same list (the
+/// dataset's creation is collective).
+Handle creation_properties(Storage storage, const std::vector<std::uint64_t>& dims, std::size_t element_bytes) {
   Handle dcpl(H5Pcreate(H5P_DATASET_CREATE), H5Pclose);
-  std::uint64_t values = 1;
-  for (hsize_t d : dims) values *= d;
+  const std::uint64_t values = product(dims);
   if (storage == Storage::Contiguous || values < 256 || H5Zfilter_avail(H5Z_FILTER_DEFLATE) <= 0) return dcpl;
-  std::vector<hsize_t> chunk = dims;
+  std::vector<hsize_t> chunk(dims.begin(), dims.end());
   const std::uint64_t row = values / dims[0];  // the values of one index of the first dimension
   const std::uint64_t max_rows = std::max<std::uint64_t>(1, (std::uint64_t{1} << 20) / (row * element_bytes));
   chunk[0] = std::min<hsize_t>(dims[0], max_rows);
@@ -284,6 +280,9 @@ Handle creation_properties(Storage storage, const std::vector<hsize_t>& dims, st
   return dcpl;
 }
 
+/// Create `name` with `global_dims` (or open it if it already exists with those dims) and write this
+/// rank's hyperslab [offset, offset + count) from contiguous `local`; a new dataset is stored as `storage`
+/// says. Collective.
 void write_hyperslab(File& file, const std::string& name, hid_t mem_type, hid_t file_type,
                      const std::vector<std::uint64_t>& global_dims, const std::vector<std::uint64_t>& offset,
                      const std::vector<std::uint64_t>& count, const void* local,
@@ -309,7 +308,7 @@ void write_hyperslab(File& file, const std::string& name, hid_t mem_type, hid_t 
     Handle lcpl(H5Pcreate(H5P_LINK_CREATE), H5Pclose);
     H5Pset_create_intermediate_group(lcpl.get(), 1);
     Handle space = simple_space(dims);
-    Handle dcpl = creation_properties(storage, dims, H5Tget_size(file_type));
+    Handle dcpl = creation_properties(storage, global_dims, H5Tget_size(file_type));
     ds = Handle(
         H5Dcreate2(file.id(), path.c_str(), file_type, space.get(), lcpl.get(), dcpl.get(), H5P_DEFAULT),
         H5Dclose);
@@ -443,8 +442,7 @@ File File::create(const std::string& path, MPI_Comm comm, Seal seal) {
   H5Pset_fapl_mpio(fapl.get(), comm, MPI_INFO_NULL);
   H5Pset_coll_metadata_write(fapl.get(), 1);
   Handle fcpl(H5Pcreate(H5P_FILE_CREATE), H5Pclose);
-  if (seal == Seal::Yes)
-    H5Pset_userblock(fcpl.get(), kSealBytes);  // room for the seal (write_atomically fills it)
+  if (seal == Seal::Yes) H5Pset_userblock(fcpl.get(), kSealBytes);  // room for the seal (write_atomically fills it)
   const hid_t id = H5Fcreate(path.c_str(), H5F_ACC_TRUNC, fcpl.get(), fapl.get());
   if (id < 0) throw RunError(path + ": cannot create HDF5 file (" + hdf5_error_text() + ")");
   return File(id, path, comm);
@@ -503,9 +501,7 @@ File File::open_read(const std::string& path, MPI_Comm comm) {
 }
 
 File::File(File&& other) noexcept
-    : file_(std::exchange(other.file_, -1)),
-      path_(std::move(other.path_)),
-      comm_(other.comm_),
+    : file_(std::exchange(other.file_, -1)), path_(std::move(other.path_)), comm_(other.comm_),
       sealed_(other.sealed_) {}
 
 File& File::operator=(File&& other) noexcept {
@@ -817,9 +813,8 @@ SealState check_seal(const std::string& path, std::string* problem) {
   char stored[17] = {};
   unsigned long long stored_bytes = 0;
   if (std::sscanf(block + magic, "%16[0-9a-f] bytes %llu", stored, &stored_bytes) != 2 || !user_block) {
-    if (problem)
-      *problem = "its checksum seal (the first 512 bytes) is unreadable; expected \"" +
-                 std::string(kSealMagic) + "<16 hex digits> bytes <n>\" followed by the HDF5 file";
+    if (problem) *problem = "its checksum seal (the first 512 bytes) is unreadable; expected \"" +
+                            std::string(kSealMagic) + "<16 hex digits> bytes <n>\" followed by the HDF5 file";
     return SealState::Damaged;
   }
   std::uint64_t bytes = 0;

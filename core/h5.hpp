@@ -63,8 +63,8 @@ class File {
   std::vector<std::string> attr_strings(const std::string& object, const std::string& name) const;
   bool has_attr(const std::string& object, const std::string& name) const;
 
-  bool exists(const std::string& path) const;  // a group or dataset
-  void create_group(const std::string& path);  // with intermediate groups; collective
+  bool exists(const std::string& path) const;      // a group or dataset
+  void create_group(const std::string& path);      // with intermediate groups; collective
   std::vector<std::uint64_t> dims(const std::string& dataset) const;
   /// True if `dataset` is stored as integers (false: floating point or anything else).
   bool is_integer(const std::string& dataset) const;
@@ -74,19 +74,16 @@ class File {
   void write_rows(const std::string& dataset, const double* local, std::int64_t local_rows, int cols);
   void write_rows(const std::string& dataset, const std::int64_t* local, std::int64_t local_rows, int cols);
   /// Read rows [first_row, first_row + rows) of a 1-D or 2-D dataset (any rank, independent).
-  std::vector<double> read_rows_double(const std::string& dataset, std::int64_t first_row,
-                                       std::int64_t rows) const;
-  std::vector<std::int64_t> read_rows_int(const std::string& dataset, std::int64_t first_row,
-                                          std::int64_t rows) const;
+  std::vector<double> read_rows_double(const std::string& dataset, std::int64_t first_row, std::int64_t rows) const;
+  std::vector<std::int64_t> read_rows_int(const std::string& dataset, std::int64_t first_row, std::int64_t rows) const;
   /// Whole dataset, flattened (any rank).
   std::vector<double> read_double(const std::string& dataset) const;
   std::vector<std::int64_t> read_int(const std::string& dataset) const;
 
   /// Distributed N-D block (row-major `global_dims`, e.g. {n_z, n_y, n_x, 3}); this rank writes the
   /// hyperslab starting at `offset` with extent `count` from contiguous `local`. Collective.
-  void write_block(const std::string& dataset, const double* local,
-                   const std::vector<std::uint64_t>& global_dims, const std::vector<std::uint64_t>& offset,
-                   const std::vector<std::uint64_t>& count);
+  void write_block(const std::string& dataset, const double* local, const std::vector<std::uint64_t>& global_dims,
+                   const std::vector<std::uint64_t>& offset, const std::vector<std::uint64_t>& count);
   std::vector<double> read_block(const std::string& dataset, const std::vector<std::uint64_t>& offset,
                                  const std::vector<std::uint64_t>& count) const;
 
@@ -99,8 +96,7 @@ class File {
   std::string storage_filter(const std::string& dataset) const;
 
  private:
-  friend void update_copy_atomically(const std::string&, const std::string&,
-                                     const std::function<void(File&)>&);
+  friend void update_copy_atomically(const std::string&, const std::string&, const std::function<void(File&)>&);
   File(hid_t file, std::string path, MPI_Comm comm) : file_(file), path_(std::move(path)), comm_(comm) {}
   hid_t file_ = -1;
   std::string path_;

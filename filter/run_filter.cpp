@@ -14,11 +14,11 @@
 
 #include "core/checksum.hpp"
 #include "core/error.hpp"
-#include "core/scene.hpp"
 #include "core/schema/filtered.hpp"
+#include "core/timers.hpp"
 #include "core/schema/series.hpp"
 #include "core/schema/snapshot.hpp"
-#include "core/timers.hpp"
+#include "core/scene.hpp"
 #include "filter/filter.hpp"
 #include "filter/statistics.hpp"
 
@@ -32,20 +32,15 @@ namespace {
 std::string rounded_duration(double s) {
   char buf[32];
   if (!(s >= 0) || !std::isfinite(s)) return "-";
-  if (s < 10)
-    std::snprintf(buf, sizeof buf, "%.1f s", s);
-  else if (s < 120)
-    std::snprintf(buf, sizeof buf, "%.0f s", s);
-  else if (s < 7200)
-    std::snprintf(buf, sizeof buf, "%.1f min", s / 60);
-  else
-    std::snprintf(buf, sizeof buf, "%.1f h", s / 3600);
+  if (s < 10) std::snprintf(buf, sizeof buf, "%.1f s", s);
+  else if (s < 120) std::snprintf(buf, sizeof buf, "%.0f s", s);
+  else if (s < 7200) std::snprintf(buf, sizeof buf, "%.1f min", s / 60);
+  else std::snprintf(buf, sizeof buf, "%.1f h", s / 3600);
   return buf;
 }
 
 constexpr int kSumFields = 5;  // count, numerator, micro, slip, phi
-constexpr int kDriftFields =
-    6;  // the drift sums: count, numerator, denominator, magnitude, phi, slip (DriftSums)
+constexpr int kDriftFields = 6;  // the drift sums: count, numerator, denominator, magnitude, phi, slip (DriftSums)
 
 /// An error on some ranks only must end the job on all of them (no rank left waiting in a
 /// collective): every rank reports its status, and all throw the first failing rank's message.
@@ -92,8 +87,7 @@ struct Statistics {
   std::vector<std::int64_t> count_int;
 };
 
-Statistics compute_statistics(const FilterPlan& plan, const FilterOptions& o,
-                              const std::vector<double>& sums) {
+Statistics compute_statistics(const FilterPlan& plan, const FilterOptions& o, const std::vector<double>& sums) {
   const std::size_t n_widths = plan.columns(), n_bins = plan.bin_edges.size() - 1;
   const std::size_t whole_col = plan.whole_box_column();
   const std::size_t per_row = n_widths * n_bins * kSumFields;
@@ -130,12 +124,10 @@ Statistics compute_statistics(const FilterPlan& plan, const FilterOptions& o,
   const std::size_t n_blocks = run_of_block.size();
   // 2. totals and block sums of numerator and micro per (width, bin)
   const std::size_t cells = n_widths * n_bins;
-  std::vector<double> total(cells * kSumFields, 0.0), block_num(n_blocks * cells, 0.0),
-      block_mic(n_blocks * cells, 0.0);
+  std::vector<double> total(cells * kSumFields, 0.0), block_num(n_blocks * cells, 0.0), block_mic(n_blocks * cells, 0.0);
   std::vector<double> rows_with(cells * plan.runs.size(), 0.0);
   std::vector<std::size_t> run_of_row;
-  for (std::size_t r = 0; r < plan.runs.size(); ++r)
-    run_of_row.insert(run_of_row.end(), plan.runs[r].files.size(), r);
+  for (std::size_t r = 0; r < plan.runs.size(); ++r) run_of_row.insert(run_of_row.end(), plan.runs[r].files.size(), r);
   for (std::size_t k = 0; k < rows; ++k)
     for (std::size_t c = 0; c < cells; ++c) {
       const double* s = &sums[k * per_row + c * kSumFields];
@@ -163,16 +155,14 @@ Statistics compute_statistics(const FilterPlan& plan, const FilterOptions& o,
     st.beta_micro[c] = t[2] / t[3];
     st.H[c] = 1.0 - t[1] / t[2];
     double ne = 0;
-    for (std::size_t r = 0; r < plan.runs.size(); ++r)
-      ne += rows_with[c * plan.runs.size() + r] / (2.0 * st.tau[r]);
+    for (std::size_t r = 0; r < plan.runs.size(); ++r) ne += rows_with[c * plan.runs.size() + r] / (2.0 * st.tau[r]);
     st.n_eff[c] = ne;
   }
   // 3. block bootstrap: every replicate resamples, within each run, as many blocks as the run has,
   //    with replacement; the same resampled blocks serve every width and bin (one replicate = one
   //    alternative history of the runs).
   std::vector<std::vector<std::size_t>> blocks_of_run(plan.runs.size());
-  for (std::size_t b = 0; b < n_blocks; ++b)
-    blocks_of_run[static_cast<std::size_t>(run_of_block[b])].push_back(b);
+  for (std::size_t b = 0; b < n_blocks; ++b) blocks_of_run[static_cast<std::size_t>(run_of_block[b])].push_back(b);
   std::mt19937_64 rng(o.seed);
   const int R = o.bootstrap_replicates;
   std::vector<double> reps(static_cast<std::size_t>(R) * cells, nan);
@@ -193,8 +183,7 @@ Statistics compute_statistics(const FilterPlan& plan, const FilterOptions& o,
       }
     }
     for (std::size_t c = 0; c < cells; ++c)
-      if (mic[c] != 0)
-        reps[c * static_cast<std::size_t>(R) + static_cast<std::size_t>(rep)] = 1.0 - num[c] / mic[c];
+      if (mic[c] != 0) reps[c * static_cast<std::size_t>(R) + static_cast<std::size_t>(rep)] = 1.0 - num[c] / mic[c];
   }
   for (std::size_t c = 0; c < cells; ++c) {
     if (!(st.count[c] > 0)) continue;
@@ -223,17 +212,13 @@ struct EquivalentWidth {
   bool at_bound = false;  // the best width is the narrowest or widest box filtered: a bound, not a match
 };
 constexpr const char* kEquivalentWidthMethod =
-    "the box width Delta minimising sum_b (H_box(Delta, b) - H_grid(b))^2 / (se_grid(b)^2 + se_box(Delta, "
-    "b)^2) over the "
-    "bins with >= 100 samples at the grid and at every box width up to 4 grid cells, H_box(Delta, b) and "
-    "se_box "
-    "linear in Delta between those widths (pooled H of the runs; se = bootstrap standard deviation), Delta "
-    "scanned on "
+    "the box width Delta minimising sum_b (H_box(Delta, b) - H_grid(b))^2 / (se_grid(b)^2 + se_box(Delta, b)^2) over the "
+    "bins with >= 100 samples at the grid and at every box width up to 4 grid cells, H_box(Delta, b) and se_box "
+    "linear in Delta between those widths (pooled H of the runs; se = bootstrap standard deviation), Delta scanned on "
     "2001 points between the narrowest and the widest of them";
 
 std::vector<EquivalentWidth> equivalent_widths(const FilterPlan& plan, const Statistics& st) {
-  const std::size_t n_bins = plan.bin_edges.size() - 1, W_all = plan.widths_m.size(),
-                    whole = plan.whole_box_column();
+  const std::size_t n_bins = plan.bin_edges.size() - 1, W_all = plan.widths_m.size(), whole = plan.whole_box_column();
   std::vector<EquivalentWidth> out(plan.grids.size());
   if (W_all < 2) return out;
   for (std::size_t g = 0; g < plan.grids.size(); ++g) {
@@ -247,8 +232,7 @@ std::vector<EquivalentWidth> equivalent_widths(const FilterPlan& plan, const Sta
       bool ok = st.count[col * n_bins + b] >= 100 && std::isfinite(st.H[col * n_bins + b]) &&
                 std::isfinite(st.H_stderr[col * n_bins + b]);
       for (std::size_t w = 0; w < W && ok; ++w)
-        ok = st.count[w * n_bins + b] >= 100 && std::isfinite(st.H[w * n_bins + b]) &&
-             std::isfinite(st.H_stderr[w * n_bins + b]);
+        ok = st.count[w * n_bins + b] >= 100 && std::isfinite(st.H[w * n_bins + b]) && std::isfinite(st.H_stderr[w * n_bins + b]);
       if (ok) bins.push_back(b);
     }
     EquivalentWidth& e = out[g];
@@ -262,8 +246,7 @@ std::vector<EquivalentWidth> equivalent_widths(const FilterPlan& plan, const Sta
       const double delta = lo + (hi - lo) * k / steps;
       std::size_t w = 0;
       while (w + 2 < W && plan.widths_m[w + 1] < delta) ++w;
-      const double t =
-          std::clamp((delta - plan.widths_m[w]) / (plan.widths_m[w + 1] - plan.widths_m[w]), 0.0, 1.0);
+      const double t = std::clamp((delta - plan.widths_m[w]) / (plan.widths_m[w + 1] - plan.widths_m[w]), 0.0, 1.0);
       double chi2 = 0, sq = 0;
       for (std::size_t b : bins) {
         const double H0 = st.H[w * n_bins + b], H1 = st.H[(w + 1) * n_bins + b];
@@ -295,15 +278,13 @@ std::vector<T> column(const std::vector<T>& v, std::size_t w, std::size_t n_bins
 }
 
 /// The per-snapshot sums of column w: (rows, n_bins) of each field of `sums`.
-schema::FilteredGroup::PerSnapshot per_snapshot_sums(const std::vector<double>& sums, std::size_t w,
-                                                     std::size_t rows, std::size_t n_widths,
-                                                     std::size_t n_bins) {
+schema::FilteredGroup::PerSnapshot per_snapshot_sums(const std::vector<double>& sums, std::size_t w, std::size_t rows,
+                                                     std::size_t n_widths, std::size_t n_bins) {
   const std::size_t per_row = n_widths * n_bins * kSumFields;
   auto field = [&](int k) {
     std::vector<double> v(rows * n_bins);
     for (std::size_t r = 0; r < rows; ++r)
-      for (std::size_t b = 0; b < n_bins; ++b)
-        v[r * n_bins + b] = sums[r * per_row + (w * n_bins + b) * kSumFields + k];
+      for (std::size_t b = 0; b < n_bins; ++b) v[r * n_bins + b] = sums[r * per_row + (w * n_bins + b) * kSumFields + k];
     return v;
   };
   schema::FilteredGroup::PerSnapshot p;  // fields: count, numerator, micro, slip, phi
@@ -320,14 +301,12 @@ schema::FilteredGroup::Samples sample_columns(const std::vector<Sample>& samples
     s.beta_micro.push_back(x.beta_micro);
     s.snapshot.push_back(x.snapshot);
     s.id.push_back(x.id);
-    for (int d = 0; d < 3; ++d)
-      s.slip.push_back(x.slip[d]), s.grad_p_filtered.push_back(x.grad_p_filtered[d]);
+    for (int d = 0; d < 3; ++d) s.slip.push_back(x.slip[d]), s.grad_p_filtered.push_back(x.grad_p_filtered[d]);
   }
   return s;
 }
 
-schema::FilteredGroup::Grid grid_attributes(const CoarseGrid& c, const EquivalentWidth& e,
-                                            double diameter_m) {
+schema::FilteredGroup::Grid grid_attributes(const CoarseGrid& c, const EquivalentWidth& e, double diameter_m) {
   schema::FilteredGroup::Grid g;
   g.cells_across = static_cast<std::int64_t>(c.cells_across);
   g.cells.assign(c.grid.cells.begin(), c.grid.cells.end());
@@ -346,15 +325,13 @@ schema::FilteredGroup::Grid grid_attributes(const CoarseGrid& c, const Equivalen
   return g;
 }
 
-/// The drift sums of every grid (`drift/` of /grids/<N>): totals over the snapshots in row order, H =
-/// numerator / denominator, and its bootstrap standard deviation over the snapshot blocks of `st` (each
-/// replicate draws, within each run, as many blocks as it has, with replacement; a seed of its own derived
-/// from --seed).
+/// The drift sums of every grid (`drift/` of /grids/<N>): totals over the snapshots in row order, H = numerator /
+/// denominator, and its bootstrap standard deviation over the snapshot blocks of `st` (each replicate draws, within
+/// each run, as many blocks as it has, with replacement; a seed of its own derived from --seed).
 std::vector<schema::FilteredGroup::Drift> drift_groups(const FilterPlan& plan, const FilterOptions& o,
                                                        const std::vector<double>& drift, const Statistics& st,
                                                        const std::vector<std::int64_t>& drift_out_of_range) {
-  const std::size_t n_grids = plan.grids.size(), n_bins = plan.bin_edges.size() - 1,
-                    n_slip = plan.slip_bins();
+  const std::size_t n_grids = plan.grids.size(), n_bins = plan.bin_edges.size() - 1, n_slip = plan.slip_bins();
   const std::size_t cells = n_bins * n_slip, per_row = n_grids * cells * kDriftFields;
   const std::size_t rows = plan.snapshot_count();
   std::vector<schema::FilteredGroup::Drift> out(n_grids);
@@ -374,8 +351,7 @@ std::vector<schema::FilteredGroup::Drift> drift_groups(const FilterPlan& plan, c
   for (std::size_t g = 0; g < n_grids; ++g) {
     schema::FilteredGroup::Drift& d = out[g];
     d.out_of_range = drift_out_of_range[g];
-    std::vector<double> total(cells * kDriftFields, 0.0), block_num(n_blocks * cells, 0.0),
-        block_den(n_blocks * cells, 0.0);
+    std::vector<double> total(cells * kDriftFields, 0.0), block_num(n_blocks * cells, 0.0), block_den(n_blocks * cells, 0.0);
     schema::FilteredGroup::Drift::PerSnapshot ps;
     ps.count.assign(rows * cells, 0);
     ps.numerator.assign(rows * cells, 0.0);
@@ -410,8 +386,7 @@ std::vector<schema::FilteredGroup::Drift> drift_groups(const FilterPlan& plan, c
     }
     // bootstrap standard deviation of H per bin (running mean and M2 over the replicates)
     std::mt19937_64 rng(o.seed ^ (0xd1f7ull + g));
-    std::vector<double> mult(n_blocks), num(cells), den(cells), mean(cells, 0.0), m2(cells, 0.0),
-        valid(cells, 0.0);
+    std::vector<double> mult(n_blocks), num(cells), den(cells), mean(cells, 0.0), m2(cells, 0.0), valid(cells, 0.0);
     for (int rep = 0; rep < o.bootstrap_replicates; ++rep) {
       std::fill(mult.begin(), mult.end(), 0.0);
       for (const auto& blocks : blocks_of_run) {
@@ -439,23 +414,20 @@ std::vector<schema::FilteredGroup::Drift> drift_groups(const FilterPlan& plan, c
     }
     for (std::size_t c = 0; c < cells; ++c)
       if (valid[c] > 1) d.H_stderr[c] = std::sqrt(m2[c] / (valid[c] - 1));
-    if (o.drift_per_snapshot)
-      d.per_snapshot = std::move(ps);  // the tables use the totals (docs/schema-filtered.md)
+    if (o.drift_per_snapshot) d.per_snapshot = std::move(ps);  // the tables use the totals (docs/schema-filtered.md)
   }
   return out;
 }
 
 /// The filtered file (core/schema/filtered.hpp) of the plan's runs and their statistics, written by rank 0.
 void write_filtered_file(const FilterPlan& plan, const FilterOptions& o, const std::vector<double>& sums,
-                         const std::vector<std::int64_t>& out_of_range,
-                         const std::vector<std::vector<Sample>>& samples, const Statistics& st,
-                         const std::vector<std::string>& checksums,
+                         const std::vector<std::int64_t>& out_of_range, const std::vector<std::vector<Sample>>& samples,
+                         const Statistics& st, const std::vector<std::string>& checksums,
                          const std::vector<EquivalentWidth>& equivalent,
                          std::vector<schema::FilteredGroup::Drift> drift) {
   const RunPlan& r0 = plan.runs.front();
   const schema::RunPhysics& p = r0.physics;
-  const std::size_t n_widths = plan.columns(), n_bins = plan.bin_edges.size() - 1,
-                    whole_col = plan.whole_box_column();
+  const std::size_t n_widths = plan.columns(), n_bins = plan.bin_edges.size() - 1, whole_col = plan.whole_box_column();
   schema::Filtered out;
   out.scene_toml = p.scene_toml;
   out.system = p.system();
@@ -490,9 +462,7 @@ void write_filtered_file(const FilterPlan& plan, const FilterOptions& o, const s
   for (std::size_t w = 0; w < n_widths; ++w) {
     const bool whole = w == whole_col, grid = w > whole_col;
     const std::size_t gi = grid ? w - whole_col - 1 : 0;
-    const double width = whole  ? plan.whole_box_width_m
-                         : grid ? r0.coarse[gi].grid.cell_size_m()
-                                : plan.widths_m[w];
+    const double width = whole ? plan.whole_box_width_m : grid ? r0.coarse[gi].grid.cell_size_m() : plan.widths_m[w];
     schema::FilteredGroup g;
     g.kind = whole ? schema::FilterKind::WholeBox : grid ? schema::FilterKind::Grid : schema::FilterKind::Box;
     g.width_m = width;
@@ -550,11 +520,10 @@ std::size_t run_filter(const FilterOptions& o, MPI_Comm comm) {
   const double d = plan.runs.front().physics.diameter_m;
   if (rank == 0 && !o.quiet) {
     for (const std::string& w : plan.warnings) std::cerr << "warning: " << w << "\n";
-    std::cerr << "cgd-filter: " << plan.runs.size() << " run(s), " << rows << " snapshot(s), " << size
-              << " rank(s); widths (d_p):";
+    std::cerr << "cgd-filter: " << plan.runs.size() << " run(s), " << rows << " snapshot(s), " << size << " rank(s); widths (d_p):";
     for (double w : plan.widths_m) std::cerr << " " << w / d;
-    std::cerr << " + whole box (" << plan.whole_box_width_m / d << "); " << n_bins << " bins of "
-              << plan.bin_edges[1] << " in phi_bar\n";
+    std::cerr << " + whole box (" << plan.whole_box_width_m / d << "); " << n_bins << " bins of " << plan.bin_edges[1]
+              << " in phi_bar\n";
   }
   // snapshot rows in run order; row k is filtered by rank k % size
   std::vector<std::pair<std::size_t, std::size_t>> row_of;  // (run, index in run)
@@ -563,8 +532,7 @@ std::size_t run_filter(const FilterOptions& o, MPI_Comm comm) {
   const std::size_t per_row = n_widths * n_bins * kSumFields;
   std::vector<double> sums(rows * per_row, 0.0);
   std::vector<std::int64_t> out_of_range(n_widths, 0);
-  // the drift sums: per row, grid, phi bin and slip bin, kDriftFields each (a slot per snapshot: exact
-  // reduction)
+  // the drift sums: per row, grid, phi bin and slip bin, kDriftFields each (a slot per snapshot: exact reduction)
   const std::size_t n_slip = plan.slip_bins();
   const std::size_t drift_per_row = plan.grids.size() * n_bins * n_slip * kDriftFields;
   std::vector<double> drift(rows * drift_per_row, 0.0);
@@ -576,8 +544,7 @@ std::size_t run_filter(const FilterOptions& o, MPI_Comm comm) {
   on_all_ranks(comm, [&] {
     {
       std::size_t done = 0, mine = 0;
-      for (std::size_t k = static_cast<std::size_t>(rank); k < rows; k += static_cast<std::size_t>(size))
-        ++mine;
+      for (std::size_t k = static_cast<std::size_t>(rank); k < rows; k += static_cast<std::size_t>(size)) ++mine;
       double last_print = wall_seconds();
       for (std::size_t k = static_cast<std::size_t>(rank); k < rows; k += static_cast<std::size_t>(size)) {
         const auto [r, i] = row_of[k];
@@ -587,8 +554,7 @@ std::size_t run_filter(const FilterOptions& o, MPI_Comm comm) {
         read_s += wall_seconds() - t0;
         SnapshotResult res = filter_snapshot(snap, plan, o, static_cast<std::int64_t>(k), r);
         filter_s += res.seconds;
-        particle_widths +=
-            res.particles * static_cast<std::int64_t>(n_widths - 1);  // grids counted as widths
+        particle_widths += res.particles * static_cast<std::int64_t>(n_widths - 1);  // grids counted as widths
         for (std::size_t c = 0; c < n_widths * n_bins; ++c) {
           double* s = &sums[k * per_row + c * kSumFields];
           s[0] = res.sums[c].count;
@@ -600,17 +566,14 @@ std::size_t run_filter(const FilterOptions& o, MPI_Comm comm) {
         for (std::size_t c = 0; c < res.drift.size(); ++c) {
           double* x = &drift[k * drift_per_row + c * kDriftFields];
           const DriftSums& ds = res.drift[c];
-          x[0] = ds.count, x[1] = ds.numerator, x[2] = ds.denominator, x[3] = ds.magnitude, x[4] = ds.phi,
-          x[5] = ds.slip;
+          x[0] = ds.count, x[1] = ds.numerator, x[2] = ds.denominator, x[3] = ds.magnitude, x[4] = ds.phi, x[5] = ds.slip;
         }
-        for (std::size_t g = 0; g < plan.grids.size(); ++g)
-          drift_out_of_range[g] += res.drift_out_of_range[g];
+        for (std::size_t g = 0; g < plan.grids.size(); ++g) drift_out_of_range[g] += res.drift_out_of_range[g];
         for (std::size_t w = 0; w < n_widths; ++w) {
           out_of_range[w] += res.out_of_range[w];
           samples[w].insert(samples[w].end(), res.samples[w].begin(), res.samples[w].end());
           if (o.samples > 0 && static_cast<std::int64_t>(samples[w].size()) > o.samples) {
-            std::sort(samples[w].begin(), samples[w].end(),
-                      [](const Sample& a, const Sample& b) { return a.key < b.key; });
+            std::sort(samples[w].begin(), samples[w].end(), [](const Sample& a, const Sample& b) { return a.key < b.key; });
             samples[w].resize(static_cast<std::size_t>(o.samples));
           }
         }
@@ -618,9 +581,9 @@ std::size_t run_filter(const FilterOptions& o, MPI_Comm comm) {
         const double t = wall_seconds();
         if (rank == 0 && !o.quiet && (t - last_print > 2.0 || done == mine)) {
           const double per = (t - t_start) / static_cast<double>(done);
-          std::cerr << "cgd-filter: " << done << "/" << mine << " snapshots of rank 0 (" << plan.runs[r].path
-                    << ", t = " << plan.runs[r].times_s[i] << " s), " << rounded_duration(per)
-                    << " each, ETA " << rounded_duration(per * static_cast<double>(mine - done)) << "\n";
+          std::cerr << "cgd-filter: " << done << "/" << mine << " snapshots of rank 0 (" << plan.runs[r].path << ", t = "
+                    << plan.runs[r].times_s[i] << " s), " << rounded_duration(per) << " each, ETA "
+                    << rounded_duration(per * static_cast<double>(mine - done)) << "\n";
           last_print = t;
         }
       }
@@ -632,23 +595,21 @@ std::size_t run_filter(const FilterOptions& o, MPI_Comm comm) {
   if (!drift.empty()) {  // in pieces: the drift sums may exceed an int count for long pools
     const std::size_t piece = std::size_t{1} << 26;
     for (std::size_t at = 0; at < drift.size(); at += piece)
-      MPI_Allreduce(MPI_IN_PLACE, drift.data() + at, static_cast<int>(std::min(piece, drift.size() - at)),
-                    MPI_DOUBLE, MPI_SUM, comm);
+      MPI_Allreduce(MPI_IN_PLACE, drift.data() + at, static_cast<int>(std::min(piece, drift.size() - at)), MPI_DOUBLE,
+                    MPI_SUM, comm);
   }
   if (!drift_out_of_range.empty())
-    MPI_Allreduce(MPI_IN_PLACE, drift_out_of_range.data(), static_cast<int>(drift_out_of_range.size()),
-                  MPI_INT64_T, MPI_SUM, comm);
+    MPI_Allreduce(MPI_IN_PLACE, drift_out_of_range.data(), static_cast<int>(drift_out_of_range.size()), MPI_INT64_T,
+                  MPI_SUM, comm);
   // checksums and samples to rank 0
   {
     std::string mine;
     for (std::size_t k = 0; k < rows; ++k) mine += checksums[k] + "\n";
     std::vector<char> all(mine.size() * static_cast<std::size_t>(size));
-    MPI_Gather(mine.data(), static_cast<int>(mine.size()), MPI_CHAR, all.data(),
-               static_cast<int>(mine.size()), MPI_CHAR, 0, comm);
+    MPI_Gather(mine.data(), static_cast<int>(mine.size()), MPI_CHAR, all.data(), static_cast<int>(mine.size()), MPI_CHAR, 0, comm);
     if (rank == 0) {
       for (int q = 0; q < size; ++q) {
-        std::istringstream in(
-            std::string(all.data() + mine.size() * static_cast<std::size_t>(q), mine.size()));
+        std::istringstream in(std::string(all.data() + mine.size() * static_cast<std::size_t>(q), mine.size()));
         std::string line;
         for (std::size_t k = 0; k < rows && std::getline(in, line); ++k)
           if (!line.empty()) checksums[k] = line;
@@ -666,12 +627,10 @@ std::size_t run_filter(const FilterOptions& o, MPI_Comm comm) {
         total += counts[static_cast<std::size_t>(q)];
       }
       std::vector<Sample> all(rank == 0 ? static_cast<std::size_t>(total) / sizeof(Sample) : 0);
-      MPI_Gatherv(samples[w].data(), bytes, MPI_BYTE, all.data(), counts.data(), displs.data(), MPI_BYTE, 0,
-                  comm);
+      MPI_Gatherv(samples[w].data(), bytes, MPI_BYTE, all.data(), counts.data(), displs.data(), MPI_BYTE, 0, comm);
       if (rank == 0) {
         std::sort(all.begin(), all.end(), [](const Sample& a, const Sample& b) { return a.key < b.key; });
-        if (static_cast<std::int64_t>(all.size()) > o.samples)
-          all.resize(static_cast<std::size_t>(o.samples));
+        if (static_cast<std::int64_t>(all.size()) > o.samples) all.resize(static_cast<std::size_t>(o.samples));
         samples[w] = std::move(all);
       }
     }
@@ -689,14 +648,14 @@ std::size_t run_filter(const FilterOptions& o, MPI_Comm comm) {
                             drift_groups(plan, o, drift, st, drift_out_of_range));
         if (!o.quiet) {
           const schema::RunPhysics& p = plan.runs.front().physics;
-          std::cerr << "cgd-filter: wrote " << o.output_path << " in " << wall_seconds() - t_start
-                    << " s (reading " << times[0] << " s, filtering " << times[1]
-                    << " s = " << (times[1] > 0 ? static_cast<double>(particle_widths) / times[1] : 0.0)
+          std::cerr << "cgd-filter: wrote " << o.output_path << " in " << wall_seconds() - t_start << " s (reading "
+                    << times[0] << " s, filtering " << times[1] << " s = "
+                    << (times[1] > 0 ? static_cast<double>(particle_widths) / times[1] : 0.0)
                     << " particle-widths/s/core, statistics and writing " << wall_seconds() - t0 << " s)\n";
           for (std::size_t r = 0; r < plan.runs.size(); ++r)
-            std::cerr << "  run " << plan.runs[r].path << ": " << plan.runs[r].files.size()
-                      << " snapshots, tau_int " << st.tau[r] << " snapshots, block length " << st.block_len[r]
-                      << ", n_eff " << st.n_eff_run[r] << "\n";
+            std::cerr << "  run " << plan.runs[r].path << ": " << plan.runs[r].files.size() << " snapshots, tau_int "
+                      << st.tau[r] << " snapshots, block length " << st.block_len[r] << ", n_eff " << st.n_eff_run[r]
+                      << "\n";
           // the whole box: the domain slip
           double c = 0, s = 0;
           for (std::size_t b = 0; b < n_bins; ++b) {
@@ -711,26 +670,21 @@ std::size_t run_filter(const FilterOptions& o, MPI_Comm comm) {
             const CoarseGrid& cg = plan.runs.front().coarse[g];
             const double h = cg.grid.cell_size_m();
             const EquivalentWidth& e = equivalent[g];
-            std::cout << "grid " << plan.grids[g] << " across (" << cg.grid.cells[0] << " x "
-                      << cg.grid.cells[1] << " x " << cg.grid.cells[2] << " cells of " << h / p.diameter_m
-                      << " d_p): equivalent box width ";
+            std::cout << "grid " << plan.grids[g] << " across (" << cg.grid.cells[0] << " x " << cg.grid.cells[1] << " x "
+                      << cg.grid.cells[2] << " cells of " << h / p.diameter_m << " d_p): equivalent box width ";
             if (e.bins > 0)
-              std::cout << (e.at_bound ? "(at the end of the widths filtered) " : "")
-                        << e.width_m / p.diameter_m << " d_p = " << e.width_m / h
-                        << " grid cells (TSC deposit+interpolate analytic sqrt(6) = " << std::sqrt(6.0)
-                        << "), " << e.bins << " bins, rms H mismatch " << e.rms << "\n";
+              std::cout << (e.at_bound ? "(at the end of the widths filtered) " : "") << e.width_m / p.diameter_m
+                        << " d_p = " << e.width_m / h << " grid cells (TSC deposit+interpolate analytic sqrt(6) = "
+                        << std::sqrt(6.0) << "), " << e.bins << " bins, rms H mismatch " << e.rms << "\n";
             else
               std::cout << "not determined (no bin with >= 100 samples at the grid and every width)\n";
-            if (n_slip >
-                0) {  // the drift sums of this grid: how many (phi, slip) bins a drift table could use
+            if (n_slip > 0) {  // the drift sums of this grid: how many (phi, slip) bins a drift table could use
               const std::size_t cells = n_bins * n_slip;
               std::vector<double> count(cells, 0.0);
               for (std::size_t k = 0; k < rows; ++k)
-                for (std::size_t c = 0; c < cells; ++c)
-                  count[c] += drift[k * drift_per_row + (g * cells + c) * kDriftFields];
+                for (std::size_t c = 0; c < cells; ++c) count[c] += drift[k * drift_per_row + (g * cells + c) * kDriftFields];
               const auto full = std::count_if(count.begin(), count.end(), [](double x) { return x >= 100; });
-              std::cout << "  drift sums: " << full
-                        << " (phi_bar, cell slip) bins with >= 100 samples (slip bins of "
+              std::cout << "  drift sums: " << full << " (phi_bar, cell slip) bins with >= 100 samples (slip bins of "
                         << plan.slip_edges[1] << " u_t up to " << plan.slip_edges.back() << " u_t), "
                         << drift_out_of_range[g] << " samples beyond them\n";
             }
@@ -740,8 +694,8 @@ std::size_t run_filter(const FilterOptions& o, MPI_Comm comm) {
               const std::size_t i = col * n_bins + b;
               if (!(st.count[i] >= 100)) continue;
               char line[160];
-              std::snprintf(line, sizeof line, "  %7.4f %7.0f %10.4f   [%.4f, %.4f]\n", st.phi_mean[i],
-                            st.count[i], st.H[i], st.H_low[i], st.H_high[i]);
+              std::snprintf(line, sizeof line, "  %7.4f %7.0f %10.4f   [%.4f, %.4f]\n", st.phi_mean[i], st.count[i], st.H[i],
+                            st.H_low[i], st.H_high[i]);
               std::cout << line;
             }
           }

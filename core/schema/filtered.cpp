@@ -7,9 +7,9 @@
 
 #include "core/error.hpp"
 #include "core/h5.hpp"
+#include "core/schema/common.hpp"
 #include "core/schema/calibration.hpp"
 #include "core/schema/check.hpp"
-#include "core/schema/common.hpp"
 
 namespace cgd::schema {
 
@@ -38,14 +38,10 @@ constexpr const char* kBins = "/bins";
 constexpr const char* kPhiEdges = "/bins/phi_edges";
 constexpr const char* kSlipEdges = "/bins/slip_edges";
 constexpr const char* kDriftDefinition =
-    "per grid and (phi bin, s_hat bin): vbar_c = sum_i w_ic v_i / sum_i w_ic (TSC deposit of the particle "
-    "velocities "
-    "on the grid; u_C where nothing is deposited), vbar_i = sum_c w_ic vbar_c, cell slip s~_i = u~_i - "
-    "vbar_i, "
-    "s_hat_i = |s~_i| / u_t; numerator = sum_i (M_i - N_i), denominator = sum_i beta_micro,i s~_i,y, "
-    "magnitude = "
-    "sum_i beta_micro,i |s~_i| (M_i, N_i, beta_micro,i of the grid's H); H = numerator / denominator: the "
-    "drift "
+    "per grid and (phi bin, s_hat bin): vbar_c = sum_i w_ic v_i / sum_i w_ic (TSC deposit of the particle velocities "
+    "on the grid; u_C where nothing is deposited), vbar_i = sum_c w_ic vbar_c, cell slip s~_i = u~_i - vbar_i, "
+    "s_hat_i = |s~_i| / u_t; numerator = sum_i (M_i - N_i), denominator = sum_i beta_micro,i s~_i,y, magnitude = "
+    "sum_i beta_micro,i |s~_i| (M_i, N_i, beta_micro,i of the grid's H); H = numerator / denominator: the drift "
     "closure F_i = V beta_micro [(u~_i - v_i) - H s~_i] reproduces the bin's total drag";
 constexpr const char* kGrids = "/grids";
 constexpr const char* kWholeBox = "/whole_box";
@@ -67,18 +63,12 @@ struct PerBin {
 };
 // in the order the writer creates them (count is written after phi_center)
 constexpr PerBin kPerBin[] = {
-    {"phi_center", &Group::phi_center, false, false},
-    {"phi_mean", &Group::phi_mean, true, true},
-    {"slip", &Group::slip, false, true},
-    {"slip_over_ut", &Group::slip_over_ut, false, false},
-    {"drag", &Group::drag, false, true},
-    {"beta_bar", &Group::beta_bar, false, false},
-    {"beta_micro", &Group::beta_micro, false, false},
-    {"H", &Group::H, true, true},
-    {"H_low", &Group::H_low, true, false},
-    {"H_high", &Group::H_high, true, false},
-    {"H_stderr", &Group::H_stderr, false, false},
-    {"n_eff", &Group::n_eff, false, false},
+    {"phi_center", &Group::phi_center, false, false}, {"phi_mean", &Group::phi_mean, true, true},
+    {"slip", &Group::slip, false, true},              {"slip_over_ut", &Group::slip_over_ut, false, false},
+    {"drag", &Group::drag, false, true},              {"beta_bar", &Group::beta_bar, false, false},
+    {"beta_micro", &Group::beta_micro, false, false}, {"H", &Group::H, true, true},
+    {"H_low", &Group::H_low, true, false},            {"H_high", &Group::H_high, true, false},
+    {"H_stderr", &Group::H_stderr, false, false},     {"n_eff", &Group::n_eff, false, false},
 };
 
 /// A float attribute of a group that may be absent (NaN then).
@@ -86,9 +76,8 @@ struct GroupNumber {
   const char* name;
   double Group::*member;
 };
-constexpr GroupNumber kGroupNumbers[] = {{"width_m", &Group::width_m},
-                                         {"width_over_dp", &Group::width_over_dp},
-                                         {"width_over_cell", &Group::width_over_cell}};
+constexpr GroupNumber kGroupNumbers[] = {
+    {"width_m", &Group::width_m}, {"width_over_dp", &Group::width_over_dp}, {"width_over_cell", &Group::width_over_cell}};
 
 using Grid = Group::Grid;
 struct GridNumber {
@@ -228,8 +217,8 @@ void write_grid_attributes(h5::File& f, const std::string& g, const Grid& c) {
 // zeros (empty bins), 4.2 MB uncompressed for one half-box run with the 4-cell grid's drift sums.
 constexpr h5::Storage kPacked = h5::Storage::Compressed;
 
-void write_drift(h5::File& f, const std::string& g, const Drift& d, std::uint64_t n_snapshots,
-                 std::uint64_t nb, std::uint64_t n_slip) {
+void write_drift(h5::File& f, const std::string& g, const Drift& d, std::uint64_t n_snapshots, std::uint64_t nb,
+                 std::uint64_t n_slip) {
   const std::string dg = g + "/drift";
   f.create_group(dg);
   f.set_attr(dg, "out_of_range", d.out_of_range);
@@ -245,8 +234,8 @@ void write_drift(h5::File& f, const std::string& g, const Drift& d, std::uint64_
   }
 }
 
-void write_group(h5::File& f, const std::string& g, const Group& w, std::uint64_t n_snapshots,
-                 std::uint64_t nb, std::uint64_t n_slip) {
+void write_group(h5::File& f, const std::string& g, const Group& w, std::uint64_t n_snapshots, std::uint64_t nb,
+                 std::uint64_t n_slip) {
   f.create_group(g);
   f.set_attr(g, "kind", std::string(to_string(w.kind)));
   for (const auto& n : kGroupNumbers) f.set_attr(g, n.name, w.*n.member);
@@ -279,9 +268,9 @@ void write_group(h5::File& f, const std::string& g, const Group& w, std::uint64_
         f.write_replicated(sg + "/id", s.id, {n}, kPacked);
         continue;
       }
-      f.write_replicated(
-          sg + "/" + c.name, s.*c.member,
-          c.width == 1 ? std::vector<std::uint64_t>{n} : std::vector<std::uint64_t>{n, c.width}, kPacked);
+      f.write_replicated(sg + "/" + c.name, s.*c.member,
+                         c.width == 1 ? std::vector<std::uint64_t>{n} : std::vector<std::uint64_t>{n, c.width},
+                         kPacked);
     }
   }
 }
@@ -292,9 +281,8 @@ double optional_finite(const h5::File& f, const std::string& object, const char*
   return f.has_attr(object, name) ? finite_attr(f, object, name) : NAN;
 }
 
-std::vector<double> optional_doubles(const h5::File& f, const std::string& name,
-                                     const std::vector<std::uint64_t>& shape, Finite finite,
-                                     const std::string& why) {
+std::vector<double> optional_doubles(const h5::File& f, const std::string& name, const std::vector<std::uint64_t>& shape,
+                                     Finite finite, const std::string& why) {
   return f.exists(name) ? read_doubles(f, name, shape, finite, why) : std::vector<double>{};
 }
 std::vector<std::int64_t> optional_ints(const h5::File& f, const std::string& name,
@@ -311,9 +299,9 @@ void require_kind(const h5::File& f, const std::string& g, FilterKind expected) 
 }
 
 /// The spelling that changed with version 2 (docs/schema-filtered.md "Versions"): version 2 spells the grids'
-/// `operator` "grid", as the groups' `kind`, cgd-fit --operator and the drag model file do; version 1 (the
-/// files written before) spelled it "tsc-deposit-interpolate". The one upgrade path: the reader of a
-/// version-1 file takes that spelling, and only a version-1 file.
+/// `operator` "grid", as the groups' `kind`, cgd-fit --operator and the drag model file do; version 1 (the files
+/// written before) spelled it "tsc-deposit-interpolate". The one upgrade path: the reader of a version-1 file
+/// takes that spelling, and only a version-1 file.
 constexpr const char* kVersion1GridOperator = "tsc-deposit-interpolate";
 const char* upgrade_version1(std::int64_t version) {
   return version == 1 ? kVersion1GridOperator : to_string(CalibrationOperator::Grid);
@@ -324,20 +312,17 @@ void require_grid_operator(const h5::File& f, const std::string& object, std::in
   const std::string text = f.attr_string(object, "operator");
   const char* expected = upgrade_version1(version);
   if (text != expected)
-    throw InputError(f.path() + ": attribute 'operator' of '" + object + "' is \"" + text +
-                     "\", expected \"" + expected + "\" (cgd_format_version " + std::to_string(version) +
-                     ")");
+    throw InputError(f.path() + ": attribute 'operator' of '" + object + "' is \"" + text + "\", expected \"" +
+                     expected + "\" (cgd_format_version " + std::to_string(version) + ")");
 }
 
 void read_root(const h5::File& f, Filtered& s) {
   if (!f.has_attr("/", kScene))
-    throw InputError(f.path() +
-                     ": filtered file lacks the root attribute 'scene' (the first run's scene text)");
+    throw InputError(f.path() + ": filtered file lacks the root attribute 'scene' (the first run's scene text)");
   s.scene_toml = f.attr_string("/", kScene);
   s.system = read_physical_system(f, names::kMicroLawAttribute, "filtered file");
   if (!(s.system.l_char_m > 0))
-    throw InputError(f.path() + ": attribute 'l_char_m' of '/' is " + number(s.system.l_char_m) +
-                     ", expected > 0");
+    throw InputError(f.path() + ": attribute 'l_char_m' of '/' is " + number(s.system.l_char_m) + ", expected > 0");
   s.parcel_size = optional_finite(f, "/", kParcelSize);
   if (f.has_attr("/", kCellSize)) s.cell_size_m = finite_attrs(f, "/", kCellSize, 3);
   if (f.has_attr("/", kPressureTerms)) s.pressure_terms = f.attr_int("/", kPressureTerms) != 0;
@@ -356,13 +341,12 @@ void read_runs_and_snapshots(const h5::File& f, Filtered& s) {
                      " edges, expected at least two, strictly increasing");
   if (f.exists(kSlipEdges)) {  // the drift sums' slip bins (absent in files written before them)
     s.slip_edges = read_doubles(f, kSlipEdges, {kAnyExtent}, Finite::Everywhere);
-    if (s.slip_edges.size() < 2 || std::adjacent_find(s.slip_edges.begin(), s.slip_edges.end(),
-                                                      std::greater_equal<>()) != s.slip_edges.end())
+    if (s.slip_edges.size() < 2 ||
+        std::adjacent_find(s.slip_edges.begin(), s.slip_edges.end(), std::greater_equal<>()) != s.slip_edges.end())
       throw InputError(path + ": dataset '/bins/slip_edges' holds " + std::to_string(s.slip_edges.size()) +
                        " edges, expected at least two, strictly increasing");
   }
-  s.run_mean_solids_fraction =
-      read_doubles(f, "/runs/mean_solids_fraction", {kAnyExtent}, Finite::Everywhere);
+  s.run_mean_solids_fraction = read_doubles(f, "/runs/mean_solids_fraction", {kAnyExtent}, Finite::Everywhere);
   const std::uint64_t nr = s.run_mean_solids_fraction.size();
   s.run_paths = f.has_attr(kRuns, "paths") ? f.attr_strings(kRuns, "paths") : std::vector<std::string>{};
   if (s.run_paths.size() != nr) s.run_paths.resize(nr, path);
@@ -387,62 +371,55 @@ void read_runs_and_snapshots(const h5::File& f, Filtered& s) {
                      " snapshots, expected " + std::to_string(ns) + " (the rows of /snapshots/run_index)");
   for (std::int64_t r : s.snapshot_run_index)
     if (r < 0 || static_cast<std::uint64_t>(r) >= nr)
-      throw InputError(path + ": dataset '/snapshots/run_index' holds " + std::to_string(r) +
-                       ", expected [0, " + std::to_string(nr) + ")");
+      throw InputError(path + ": dataset '/snapshots/run_index' holds " + std::to_string(r) + ", expected [0, " +
+                       std::to_string(nr) + ")");
 }
 
 Grid read_grid_attributes(const h5::File& f, const std::string& g, std::int64_t version) {
   Grid c;
   for (const char* key : {"cells_across", "cell_size_over_dp"})
-    if (!f.has_attr(g, key))
-      throw InputError(f.path() + ": grid group '" + g + "' lacks the attribute '" + key + "'");
+    if (!f.has_attr(g, key)) throw InputError(f.path() + ": grid group '" + g + "' lacks the attribute '" + key + "'");
   c.cells_across = f.attr_int(g, "cells_across");
   c.cell_size_over_dp = finite_attr(f, g, "cell_size_over_dp");
   if (!(c.cell_size_over_dp > 0))
-    throw InputError(f.path() + ": attribute 'cell_size_over_dp' of '" + g + "' is " +
-                     number(c.cell_size_over_dp) + ", expected > 0");
+    throw InputError(f.path() + ": attribute 'cell_size_over_dp' of '" + g + "' is " + number(c.cell_size_over_dp) +
+                     ", expected > 0");
   if (f.has_attr(g, "cells")) c.cells = f.attr_ints(g, "cells");
   if (f.has_attr(g, "cell_spacing_m")) c.cell_spacing_m = finite_attrs(f, g, "cell_spacing_m", 3);
   for (const auto& n : kGridNumbers) c.*n.member = optional_finite(f, g, n.name);
   for (const auto& n : kEquivalentNumbers)
     if (f.has_attr(g, n.name)) c.*n.member = f.attr_double(g, n.name);
-  if (f.has_attr(g, "equivalent_width_rms"))
-    c.equivalent_width_rms = f.attr_double(g, "equivalent_width_rms");
-  if (f.has_attr(g, "equivalent_width_bins"))
-    c.equivalent_width_bins = f.attr_int(g, "equivalent_width_bins");
+  if (f.has_attr(g, "equivalent_width_rms")) c.equivalent_width_rms = f.attr_double(g, "equivalent_width_rms");
+  if (f.has_attr(g, "equivalent_width_bins")) c.equivalent_width_bins = f.attr_int(g, "equivalent_width_bins");
   if (f.has_attr(g, "equivalent_width_at_bound"))
     c.equivalent_width_at_bound = f.attr_int(g, "equivalent_width_at_bound") != 0;
-  if (f.has_attr(g, "equivalent_width_method"))
-    c.equivalent_width_method = f.attr_string(g, "equivalent_width_method");
+  if (f.has_attr(g, "equivalent_width_method")) c.equivalent_width_method = f.attr_string(g, "equivalent_width_method");
   require_grid_operator(f, g, version);
   return c;
 }
 
-/// `drift/` of a grid group: the totals of shape (n_bins, n_slip), count int64 >= 0, the sums finite;
-/// per_snapshot/ (where present) of shape (n_snapshots, n_bins, n_slip), its count summing to the totals'.
-Drift read_drift(const h5::File& f, const std::string& g, std::uint64_t ns, std::uint64_t nb,
-                 std::uint64_t n_slip) {
+/// `drift/` of a grid group: the totals of shape (n_bins, n_slip), count int64 >= 0, the sums finite; per_snapshot/
+/// (where present) of shape (n_snapshots, n_bins, n_slip), its count summing to the totals'.
+Drift read_drift(const h5::File& f, const std::string& g, std::uint64_t ns, std::uint64_t nb, std::uint64_t n_slip) {
   const std::string& path = f.path();
   const std::string dg = g + "/drift";
   if (n_slip == 0)
-    throw InputError(path + ": group '" + dg +
-                     "' is present but '/bins/slip_edges' is not (the slip bins of its sums)");
+    throw InputError(path + ": group '" + dg + "' is present but '/bins/slip_edges' is not (the slip bins of its sums)");
   Drift d;
   if (f.has_attr(dg, "out_of_range")) d.out_of_range = f.attr_int(dg, "out_of_range");
   const std::string shape = "(n_bins, n_slip) = (" + std::to_string(nb) + ", " + std::to_string(n_slip) + ")";
   d.count = read_ints(f, dg + "/count", {nb, n_slip}, shape);
   for (std::size_t k = 0; k < d.count.size(); ++k)
     if (d.count[k] < 0)
-      throw InputError(path + ": dataset '" + dg + "/count' holds " + std::to_string(d.count[k]) +
-                       ", expected counts >= 0");
+      throw InputError(path + ": dataset '" + dg + "/count' holds " + std::to_string(d.count[k]) + ", expected counts >= 0");
   for (const DriftNumber& n : kDriftNumbers)
     if (n.finite == Finite::Everywhere || f.exists(dg + "/" + n.name))
       d.*n.member = read_doubles(f, dg + "/" + n.name, {nb, n_slip}, n.finite, shape);
   const std::string ps = dg + "/per_snapshot";
   if (f.exists(ps + "/count")) {
     Drift::PerSnapshot p;
-    const std::string pshape = "(n_snapshots, n_bins, n_slip) = (" + std::to_string(ns) + ", " +
-                               std::to_string(nb) + ", " + std::to_string(n_slip) + ")";
+    const std::string pshape = "(n_snapshots, n_bins, n_slip) = (" + std::to_string(ns) + ", " + std::to_string(nb) +
+                               ", " + std::to_string(n_slip) + ")";
     p.count = read_ints(f, ps + "/count", {ns, nb, n_slip}, pshape);
     p.numerator = read_doubles(f, ps + "/numerator", {ns, nb, n_slip}, Finite::Everywhere, pshape);
     p.denominator = read_doubles(f, ps + "/denominator", {ns, nb, n_slip}, Finite::Everywhere, pshape);
@@ -451,27 +428,24 @@ Drift read_drift(const h5::File& f, const std::string& g, std::uint64_t ns, std:
       std::int64_t sum = 0;
       for (std::size_t k = 0; k < ns; ++k) sum += p.count[k * cells + c];
       if (sum != d.count[c])
-        throw InputError(path + ": dataset '" + ps + "/count' sums to " + std::to_string(sum) +
-                         " samples in (phi bin " + std::to_string(c / n_slip) + ", slip bin " +
-                         std::to_string(c % n_slip) + "), expected " + std::to_string(d.count[c]) + " (" +
-                         dg + "/count)");
+        throw InputError(path + ": dataset '" + ps + "/count' sums to " + std::to_string(sum) + " samples in (phi bin " +
+                         std::to_string(c / n_slip) + ", slip bin " + std::to_string(c % n_slip) + "), expected " +
+                         std::to_string(d.count[c]) + " (" + dg + "/count)");
     }
     d.per_snapshot = std::move(p);
   }
   return d;
 }
 
-Group read_group(const h5::File& f, const std::string& g, FilterKind kind, std::int64_t version,
-                 bool per_snapshot, std::uint64_t ns, std::uint64_t nb, std::uint64_t n_slip) {
+Group read_group(const h5::File& f, const std::string& g, FilterKind kind, std::int64_t version, bool per_snapshot, std::uint64_t ns,
+                 std::uint64_t nb, std::uint64_t n_slip) {
   const std::string& path = f.path();
   Group w;
   w.kind = kind;
   require_kind(f, g, kind);
-  if (!f.has_attr(g, "F"))
-    throw InputError(path + ": group '" + g + "' lacks the attribute 'F' (L_char / width)");
+  if (!f.has_attr(g, "F")) throw InputError(path + ": group '" + g + "' lacks the attribute 'F' (L_char / width)");
   w.F = finite_attr(f, g, "F");
-  if (!(w.F > 0))
-    throw InputError(path + ": attribute 'F' of '" + g + "' is " + number(w.F) + ", expected > 0");
+  if (!(w.F > 0)) throw InputError(path + ": attribute 'F' of '" + g + "' is " + number(w.F) + ", expected > 0");
   for (const auto& n : kGroupNumbers) w.*n.member = optional_finite(f, g, n.name);
   if (f.has_attr(g, "out_of_range")) w.out_of_range = f.attr_int(g, "out_of_range");
   if (kind == FilterKind::Grid) w.grid = read_grid_attributes(f, g, version);
@@ -491,20 +465,17 @@ Group read_group(const h5::File& f, const std::string& g, FilterKind kind, std::
   if (per_snapshot) {
     PerSnapshot p;
     const std::string ps = g + "/per_snapshot";
-    const std::string shape =
-        "(n_snapshots, n_bins) = (" + std::to_string(ns) + ", " + std::to_string(nb) + ")";
+    const std::string shape = "(n_snapshots, n_bins) = (" + std::to_string(ns) + ", " + std::to_string(nb) + ")";
     for (const SnapshotSums& s : kSnapshotSums)
       if (s.required || f.exists(ps + "/" + s.name))
-        p.*s.member = read_doubles(f, ps + "/" + s.name, {ns, nb},
-                                   s.required ? Finite::Everywhere : Finite::Not, shape);
+        p.*s.member = read_doubles(f, ps + "/" + s.name, {ns, nb}, s.required ? Finite::Everywhere : Finite::Not, shape);
     p.count = read_ints(f, ps + "/count", {ns, nb}, shape);
     for (std::size_t b = 0; b < nb; ++b) {
       std::int64_t sum = 0;
       for (std::size_t k = 0; k < ns; ++k) sum += p.count[k * nb + b];
       if (sum != w.count[b])
-        throw InputError(path + ": dataset '" + ps + "/count' sums to " + std::to_string(sum) +
-                         " samples in bin " + std::to_string(b) + ", expected " + std::to_string(w.count[b]) +
-                         " (" + g + "/count)");
+        throw InputError(path + ": dataset '" + ps + "/count' sums to " + std::to_string(sum) + " samples in bin " +
+                         std::to_string(b) + ", expected " + std::to_string(w.count[b]) + " (" + g + "/count)");
     }
     w.per_snapshot = std::move(p);
   }
@@ -517,10 +488,9 @@ Group read_group(const h5::File& f, const std::string& g, FilterKind kind, std::
     const std::string rows = "one row per sample, the length of " + sg + "/phi";
     for (const SampleColumn& c : kSampleColumns)
       if (c.member != &Samples::phi)
-        s.*c.member = read_doubles(
-            f, sg + "/" + c.name,
-            c.width == 1 ? std::vector<std::uint64_t>{n} : std::vector<std::uint64_t>{n, c.width},
-            Finite::Not, rows);
+        s.*c.member = read_doubles(f, sg + "/" + c.name,
+                                   c.width == 1 ? std::vector<std::uint64_t>{n} : std::vector<std::uint64_t>{n, c.width},
+                                   Finite::Not, rows);
     s.snapshot = read_ints(f, sg + "/snapshot", {n}, rows);
     s.id = read_ints(f, sg + "/id", {n}, rows);
     w.samples = std::move(s);
@@ -532,24 +502,18 @@ Group read_group(const h5::File& f, const std::string& g, FilterKind kind, std::
 
 const char* to_string(FilterKind kind) {
   switch (kind) {
-    case FilterKind::Box:
-      return "box";
-    case FilterKind::WholeBox:
-      return "whole_box";
-    case FilterKind::Grid:
-      return "grid";
+    case FilterKind::Box: return "box";
+    case FilterKind::WholeBox: return "whole_box";
+    case FilterKind::Grid: return "grid";
   }
   return "box";
 }
 
 std::string group_path(const FilteredGroup& group, std::size_t box_index) {
   switch (group.kind) {
-    case FilterKind::WholeBox:
-      return kWholeBox;
-    case FilterKind::Grid:
-      return std::string(kGrids) + "/" + std::to_string(group.grid ? group.grid->cells_across : 0);
-    case FilterKind::Box:
-      break;
+    case FilterKind::WholeBox: return kWholeBox;
+    case FilterKind::Grid: return std::string(kGrids) + "/" + std::to_string(group.grid ? group.grid->cells_across : 0);
+    case FilterKind::Box: break;
   }
   return kWidthPrefix + std::to_string(box_index);
 }
@@ -611,8 +575,8 @@ Filtered read_filtered(const std::string& path) {
     s.groups.push_back(read_group(f, g, kind, s.version, per_snapshot, ns, nb, s.slip_bins()));
   for (const FilteredGroup& g : s.groups)
     if (g.kind == FilterKind::Grid && g.grid && g.grid->cells_across <= 0)
-      throw InputError(path + ": attribute 'cells_across' of a grid group is " +
-                       std::to_string(g.grid->cells_across) + ", expected > 0");
+      throw InputError(path + ": attribute 'cells_across' of a grid group is " + std::to_string(g.grid->cells_across) +
+                       ", expected > 0");
   return s;
 }
 

@@ -42,6 +42,7 @@ def close(a, b, rel=1e-12):
 
 
 def check_group(path, f, name):
+    """Checks the group's totals against its per-snapshot sums; returns the summed (count, numerator, micro, phi)."""
     g = f[name]
     ps = g["per_snapshot"]
     count = ps["count"][()].sum(axis=0)
@@ -55,6 +56,7 @@ def check_group(path, f, name):
         fail(f"{path}:{name}: H differs from 1 - sum N / sum beta_micro u_slip of per_snapshot")
     if not close(phi_mean, g["phi_mean"][()]):
         fail(f"{path}:{name}: phi_mean differs from the per-snapshot sums")
+    return count, num, mic, phi
 
 
 def main():
@@ -78,10 +80,9 @@ def main():
             for name in groups:
                 if name not in f:
                     fail(f"{path}: no /{name}")
-                check_group(path, f, name)
-            ps = f["grids/4/per_snapshot"]
-            sums = [ps[k][()].sum(axis=0) for k in ("count", "numerator", "micro", "phi")]
-            pooled = sums if pooled is None else [p + s for p, s in zip(pooled, sums)]
+                sums = check_group(path, f, name)
+                if name == "grids/4":
+                    pooled = sums if pooled is None else [p + s for p, s in zip(pooled, sums)]
 
     with tempfile.TemporaryDirectory() as tmp:
         table = os.path.join(tmp, "table.h5")

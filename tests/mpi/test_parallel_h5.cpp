@@ -13,9 +13,9 @@
 
 #include "core/error.hpp"
 #include "core/h5.hpp"
-#include "core/scene.hpp"
 #include "core/schema/series.hpp"
 #include "core/schema/snapshot.hpp"
+#include "core/scene.hpp"
 
 namespace fs = std::filesystem;
 using cgd::h5::File;
@@ -65,6 +65,13 @@ std::pair<int, int> slab(int n, int rank, int size) {
   return {offset, count};
 }
 
+/// 400 values, mostly zero, the same on every rank.
+std::vector<double> full_table() {
+  std::vector<double> t(400, 0.0);
+  for (std::size_t i = 0; i < t.size(); i += 7) t[i] = 0.1 * static_cast<double>(i);
+  return t;
+}
+
 }  // namespace
 
 TEST_F(ParallelH5, DistributedRowsComeBackInRankOrderIncludingRanksWithoutRows) {
@@ -108,15 +115,6 @@ TEST_F(ParallelH5, DistributedRowsComeBackInRankOrderIncludingRanksWithoutRows) 
   EXPECT_EQ(f.read_double("/b/position"), expect_b);
 }
 
-namespace {
-/// 400 values, mostly zero, the same on every rank.
-std::vector<double> full_table() {
-  std::vector<double> t(400, 0.0);
-  for (std::size_t i = 0; i < t.size(); i += 7) t[i] = 0.1 * static_cast<double>(i);
-  return t;
-}
-}  // namespace
-
 TEST_F(ParallelH5, YSlabBlocksFromEveryRankAssembleTheFullField) {
   const int rank = comm_rank(), size = comm_size();
   const int nx = 5, ny = 7, nz = 3;
@@ -133,8 +131,7 @@ TEST_F(ParallelH5, YSlabBlocksFromEveryRankAssembleTheFullField) {
     f.write_block("/fluid/velocity", local.empty() ? nullptr : local.data(), {nz, ny, nx, 3}, {0, uy0, 0, 0},
                   {nz, uyc, nx, 3});
     f.write_replicated("/table", std::vector<double>{1.0, 2.0, 3.0}, {3});
-    // a compressed table (the filtered file's sums): HDF5's parallel filtered write, collective, rank 0's
-    // copy
+    // a compressed table (the filtered file's sums): HDF5's parallel filtered write, collective, rank 0's copy
     f.write_replicated("/packed", full_table(), {40, 10}, cgd::h5::Storage::Compressed);
     f.set_attr("/fluid", "layout", std::string("z, y, x"));
     f.close();

@@ -1,22 +1,17 @@
-// The drift-velocity (two-marker) closure, fluid.drag = "drift" (issue 28; docs/closure.md "The
-// drift-velocity closure"; core/drag.hpp above the law table; sim/coupling/coupler.hpp), against answers
-// known here:
+// The drift-velocity (two-marker) closure, fluid.drag = "drift" (issue 28; docs/closure.md "The drift-velocity
+// closure"; core/drag.hpp above the law table; sim/coupling/coupler.hpp), against answers known here:
 //   (a) the drift table: bilinear between its bin centres, constant outside, clamped to [-1, h_max];
-//   (b) the cell-mean particle velocity, its interpolation, the cell slip and the force of two particles in
-//   one cell,
+//   (b) the cell-mean particle velocity, its interpolation, the cell slip and the force of two particles in one cell,
 //       computed by hand from the TSC weights;
-//   (c) a constant table H gives the force of the phi-only table law with that H when every particle moves
-//   with its
+//   (c) a constant table H gives the force of the phi-only table law with that H when every particle moves with its
 //       cell's mean (uniform velocities), and differs by H beta V (vbar_i - v_i) when not;
 //   (d) H = 0 gives the micro law's run bit for bit (a coupled run of the engine);
-//   (e) the mixture momentum is conserved to round-off with the drift law (a varying table, random
-//   velocities); (f) the scene refuses a drift table with fluid.drag = "model" and a phi-only model with
-//   "drift"; (g) cgd-fit --drift-table: a filtered file with drift sums (written and read through its schema)
-//   gives the table
+//   (e) the mixture momentum is conserved to round-off with the drift law (a varying table, random velocities);
+//   (f) the scene refuses a drift table with fluid.drag = "model" and a phi-only model with "drift";
+//   (g) cgd-fit --drift-table: a filtered file with drift sums (written and read through its schema) gives the table
 //       H = N/S where measured and the filling rule elsewhere; the model file round-trips;
 //   (h) a damaged drift table is refused by the model file's reader.
-// The filter's drift sums: tests/unit/test_tsc_grid.cpp (DriftSums.*); 1 vs 2 ranks:
-// tests/mpi/test_coupled_mpi.cpp.
+// The filter's drift sums: tests/unit/test_tsc_grid.cpp (DriftSums.*); 1 vs 2 ranks: tests/mpi/test_coupled_mpi.cpp.
 #include <gtest/gtest.h>
 #include <hdf5.h>
 #include <mpi.h>
@@ -26,8 +21,8 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
-#include <filesystem>
 #include <functional>
+#include <filesystem>
 #include <memory>
 #include <numbers>
 #include <numeric>
@@ -42,15 +37,15 @@
 #include "core/scene.hpp"
 #include "core/schema/drag_model.hpp"
 #include "core/schema/filtered.hpp"
-#include "drift_test_util.hpp"
 #include "fit/filtered_input.hpp"
 #include "fit/fitter.hpp"
-#include "run_quietly.hpp"
 #include "sim/coupling/coupler.hpp"
 #include "sim/dem/placement.hpp"
 #include "sim/dem/system.hpp"
 #include "sim/fluid/solver.hpp"
 #include "sim/run.hpp"
+#include "drift_test_util.hpp"
+#include "run_quietly.hpp"
 #include "temp_dir.hpp"
 #include "test_scenes.hpp"
 
@@ -63,8 +58,7 @@ using cgd::testing::TempDir;
 constexpr double kD = 75e-6, kRhoP = 1500.0, kRhoF = 1.3, kMu = 1.8e-5, kUt = 0.2185;
 
 /// An in-memory drift model (Beetstra micro law) of table H on (phi, slip).
-std::shared_ptr<cgd::DragModel> drift_model(std::vector<double> phi, std::vector<double> slip,
-                                            std::vector<double> H) {
+std::shared_ptr<cgd::DragModel> drift_model(std::vector<double> phi, std::vector<double> slip, std::vector<double> H) {
   auto m = std::make_shared<cgd::DragModel>();
   m->micro_drag = DragLaw::Beetstra;
   m->u_t_m_s = kUt;
@@ -94,26 +88,24 @@ std::shared_ptr<cgd::DragModel> constant_table_model(double H) {
   return m;
 }
 
-// ---- (a) the table
-// ------------------------------------------------------------------------------------------
+// ---- (a) the table ------------------------------------------------------------------------------------------
 
 TEST(DriftTable, BilinearBetweenCentresConstantOutsideClamped) {
   const cgd::DriftTable t{{0.05, 0.15}, {0.25, 0.75, 1.25}, {0.1, 0.3, 0.5, 0.2, 0.6, 1.4}, 0.99};
   EXPECT_DOUBLE_EQ(t(0.05, 0.25), 0.1);
   EXPECT_DOUBLE_EQ(t(0.15, 0.75), 0.6);
-  EXPECT_NEAR(t(0.10, 0.50), 0.25 * (0.1 + 0.3 + 0.2 + 0.6), 1e-15);  // the middle of a cell
-  EXPECT_NEAR(t(0.075, 1.0), 0.75 * 0.4 + 0.25 * 1.0, 1e-15);         // 1/4 along phi, between slip 2 and 3
-  EXPECT_NEAR(t(0.0, 0.0), 0.1, 1e-15);                               // below both ends: the corner
-  EXPECT_NEAR(t(0.10, 5.0), 0.5 * (0.5 + 1.4), 1e-15);                // beyond the slip end: its last column
-  EXPECT_NEAR(t(0.20, 5.0), 0.99, 1e-15);                             // 1.4 clamped to h_max
+  EXPECT_NEAR(t(0.10, 0.50), 0.25 * (0.1 + 0.3 + 0.2 + 0.6), 1e-15);       // the middle of a cell
+  EXPECT_NEAR(t(0.075, 1.0), 0.75 * 0.4 + 0.25 * 1.0, 1e-15);              // 1/4 along phi, between slip 2 and 3
+  EXPECT_NEAR(t(0.0, 0.0), 0.1, 1e-15);                                    // below both ends: the corner
+  EXPECT_NEAR(t(0.10, 5.0), 0.5 * (0.5 + 1.4), 1e-15);                    // beyond the slip end: its last column
+  EXPECT_NEAR(t(0.20, 5.0), 0.99, 1e-15);                                  // 1.4 clamped to h_max
   const cgd::DriftTable neg{{0.1, 0.2}, {0.5}, {-3.0, 0.2}, 0.99};
   EXPECT_NEAR(neg(0.0, 1.0), -1.0, 1e-15);  // clamped at -1; one slip column: constant in the slip
   EXPECT_NEAR(neg(0.19, 0.0), 0.1 * -3.0 + 0.9 * 0.2, 1e-15);
   EXPECT_NEAR(neg(0.15, 0.0), -1.0, 1e-15);  // -1.4 clamped
 }
 
-// ---- the coupler on hand-made particles
-// ---------------------------------------------------------------------
+// ---- the coupler on hand-made particles ---------------------------------------------------------------------
 
 constexpr double kCell = 4 * kD;  // cells of 4 d_p, a 4^3 box
 
@@ -149,24 +141,22 @@ cgd::dem::Particles particles(const std::vector<double>& x, const std::vector<do
   return p;
 }
 
-// (b) Two particles in cell (1, 1, 1) of a fluid at rest: A at its centre, B a quarter cell further along x.
-// Per axis the TSC weights on cells 0, 1, 2 are aA = (1/8, 3/4, 1/8) and, along x for B, aB = ((1/2 -
-// 1/4)^2/2, 3/4 - 1/16, (1/2 + 1/4)^2/2) = (1/32, 11/16, 9/32); along y and z B has A's. Both deposit on the
-// same 27 cells, and the y, z weights (common to both) cancel in the cell mean: vbar(ix) = (aA vA + aB
-// vB)/(aA + aB) for every cell of column ix, so vbar_A = sum_ix aA(ix) vbar(ix) and vbar_B = sum_ix aB(ix)
-// vbar(ix). u = 0: the cell slip is -vbar_i; phi_i = (V/V_cell) (sum aA^2)^2 sum_ix a_i(ix) (aA + aB)(ix).
-// With the constant table H = 0.4 the acceleration is beta_i/rho_p (-v_i + 0.4 vbar_i), beta_i =
-// Beetstra(phi_i, |v_i|); the phi-only table law with H = 0.4 gives 0.6 beta_i/rho_p (-v_i): they differ by
-// 0.4 beta_i/rho_p (vbar_i - v_i).
+// (b) Two particles in cell (1, 1, 1) of a fluid at rest: A at its centre, B a quarter cell further along x. Per axis
+// the TSC weights on cells 0, 1, 2 are aA = (1/8, 3/4, 1/8) and, along x for B, aB = ((1/2 - 1/4)^2/2, 3/4 - 1/16,
+// (1/2 + 1/4)^2/2) = (1/32, 11/16, 9/32); along y and z B has A's. Both deposit on the same 27 cells, and the y, z
+// weights (common to both) cancel in the cell mean: vbar(ix) = (aA vA + aB vB)/(aA + aB) for every cell of column
+// ix, so vbar_A = sum_ix aA(ix) vbar(ix) and vbar_B = sum_ix aB(ix) vbar(ix). u = 0: the cell slip is -vbar_i; phi_i
+// = (V/V_cell) (sum aA^2)^2 sum_ix a_i(ix) (aA + aB)(ix). With the constant table H = 0.4 the acceleration is
+// beta_i/rho_p (-v_i + 0.4 vbar_i), beta_i = Beetstra(phi_i, |v_i|); the phi-only table law with H = 0.4 gives
+// 0.6 beta_i/rho_p (-v_i): they differ by 0.4 beta_i/rho_p (vbar_i - v_i).
 TEST(DriftCoupler, CellMeanVelocityAndForceOfTwoParticlesInOneCellByHand) {
   Bench b;
   const double h0 = 0.4;
-  const std::vector<double> x = {1.5 * kCell,  1.5 * kCell, 1.5 * kCell,
-                                 1.75 * kCell, 1.5 * kCell, 1.5 * kCell};
+  const std::vector<double> x = {1.5 * kCell, 1.5 * kCell, 1.5 * kCell, 1.75 * kCell, 1.5 * kCell, 1.5 * kCell};
   const std::vector<double> v = {0.0, -0.1, 0.0, 0.02, -0.3, 0.01};
   cgd::dem::Particles p = particles(x, v);
-  cgd::coupling::Coupler drift(
-      coupler_settings(DragLaw::Drift, drift_model({0.0, 0.5}, {0.0, 3.0}, {h0, h0, h0, h0})), b.grid);
+  cgd::coupling::Coupler drift(coupler_settings(DragLaw::Drift, drift_model({0.0, 0.5}, {0.0, 3.0}, {h0, h0, h0, h0})),
+                               b.grid);
   drift.compute_drag(p, b.fluid.state());
   drift.compute_particle_forces(p, b.fluid.state());
   const std::vector<double> a_drift = std::vector<double>(p.a_ext.begin(), p.a_ext.begin() + 6);
@@ -198,11 +188,9 @@ TEST(DriftCoupler, CellMeanVelocityAndForceOfTwoParticlesInOneCellByHand) {
       EXPECT_NEAR(pc.cell_slip[3 * i + d], -vbar[i][d], 1e-15) << "particle " << i << " axis " << d;
       EXPECT_NEAR(pc.drift_shift[3 * i + d], -h0 * vbar[i][d], 1e-15);
       const double expect = beta / kRhoP * (-v[3 * i + d] + h0 * vbar[i][d]);
-      EXPECT_NEAR(a_drift[3 * i + d], expect, 1e-12 * std::abs(beta / kRhoP * 0.3))
-          << "particle " << i << " axis " << d;
+      EXPECT_NEAR(a_drift[3 * i + d], expect, 1e-12 * std::abs(beta / kRhoP * 0.3)) << "particle " << i << " axis " << d;
       // the phi-only law with the same H: (1 - H) beta, and the difference is H beta (vbar - v) / rho_p
-      EXPECT_NEAR(q.a_ext[3 * i + d], (1 - h0) * beta / kRhoP * -v[3 * i + d],
-                  1e-12 * std::abs(beta / kRhoP * 0.3));
+      EXPECT_NEAR(q.a_ext[3 * i + d], (1 - h0) * beta / kRhoP * -v[3 * i + d], 1e-12 * std::abs(beta / kRhoP * 0.3));
       EXPECT_NEAR(a_drift[3 * i + d] - q.a_ext[3 * i + d], h0 * beta / kRhoP * (vbar[i][d] - v[3 * i + d]),
                   1e-12 * std::abs(beta / kRhoP * 0.3));
     }
@@ -212,8 +200,8 @@ TEST(DriftCoupler, CellMeanVelocityAndForceOfTwoParticlesInOneCellByHand) {
   EXPECT_GT(std::abs(vbar_B[1] - v[4]), 0.01);
 }
 
-// (c) Uniform velocities (every particle with its cells' mean, random positions): the drift law with constant
-// H is the phi-only table law with that H, force and cell deposit, to round-off (vbar_c = v to 1 ulp).
+// (c) Uniform velocities (every particle with its cells' mean, random positions): the drift law with constant H is
+// the phi-only table law with that H, force and cell deposit, to round-off (vbar_c = v to 1 ulp).
 TEST(DriftCoupler, ConstantTableIsThePhiOnlyTableLawForUniformVelocities) {
   Bench b;
   const double h0 = 0.35;
@@ -230,8 +218,8 @@ TEST(DriftCoupler, ConstantTableIsThePhiOnlyTableLawForUniformVelocities) {
   auto& st = b.fluid.state();
   for (int d = 0; d < 3; ++d)
     for (std::size_t c = 0; c < st.velocity[d].size(); ++c) st.velocity[d][c] = 0.02 * std::sin(0.7 * c + d);
-  cgd::coupling::Coupler drift(
-      coupler_settings(DragLaw::Drift, drift_model({0.0, 0.5}, {0.0, 3.0}, {h0, h0, h0, h0})), b.grid);
+  cgd::coupling::Coupler drift(coupler_settings(DragLaw::Drift, drift_model({0.0, 0.5}, {0.0, 3.0}, {h0, h0, h0, h0})),
+                               b.grid);
   drift.compute_drag(p, st);
   const std::vector<double> B_drift = st.drag_coefficient;
   drift.compute_particle_forces(p, st);
@@ -247,12 +235,11 @@ TEST(DriftCoupler, ConstantTableIsThePhiOnlyTableLawForUniformVelocities) {
   // the drift law's force is beta (u - v) - H beta (u - vbar): with vbar = v that is (1 - H) beta (u - v)
   for (std::size_t i = 0; i < p.n_owned; ++i)
     for (int d = 0; d < 3; ++d)
-      EXPECT_NEAR(drift.particles().cell_slip[3 * i + d],
-                  drift.particles().fluid_velocity[3 * i + d] - v[3 * i + d], 1e-15);
+      EXPECT_NEAR(drift.particles().cell_slip[3 * i + d], drift.particles().fluid_velocity[3 * i + d] - v[3 * i + d],
+                  1e-15);
 }
 
-// ---- the engine
-// ---------------------------------------------------------------------------------------------
+// ---- the engine ---------------------------------------------------------------------------------------------
 
 cgd::Scene make_scene(const std::vector<std::string>& overrides) {
   return cgd::load_scene_from_string(cgd::testing::test_scene_text("unit_suspension.toml"), "drift_test.toml",
@@ -269,13 +256,12 @@ Final read_final(const fs::path& run) {
     if (e.path().filename().string().rfind("snap_", 0) == 0) files.push_back(e.path());
   std::sort(files.begin(), files.end());
   cgd::h5::File f = cgd::h5::File::open_read(files.back().string(), MPI_COMM_SELF);
-  return {f.read_double("/particles/position"), f.read_double("/particles/velocity"),
-          f.read_double("/fluid/velocity"), f.read_double("/fluid/pressure")};
+  return {f.read_double("/particles/position"), f.read_double("/particles/velocity"), f.read_double("/fluid/velocity"),
+          f.read_double("/fluid/pressure")};
 }
 
-// (d) H = 0: the drift law's force is beta_micro (u - v - 0 s~) and its deposit v + 0 s~: the micro law's,
-// bit for bit (0 x s~ = 0 and v + 0 = v exactly). A table with H != 0 changes the run (the comparison is not
-// vacuous).
+// (d) H = 0: the drift law's force is beta_micro (u - v - 0 s~) and its deposit v + 0 s~: the micro law's, bit for
+// bit (0 x s~ = 0 and v + 0 = v exactly). A table with H != 0 changes the run (the comparison is not vacuous).
 TEST(DriftEngine, ZeroTableGivesTheMicroLawRunBitForBit) {
   TempDir dir;
   const std::vector<std::string> base = {"particles.velocity_rms=0.02", "run.end_time=0.008"};
@@ -302,11 +288,10 @@ TEST(DriftEngine, ZeroTableGivesTheMicroLawRunBitForBit) {
   EXPECT_GT(dv, 1e-6) << "a table with H > 0 changes the run";
 }
 
-// (e) The mixture momentum with the drift law: the fluid gets B and B (v + d), the particle beta (u - v - d)
-// with the same d = H s~ (frozen at the deposit): its impulse is minus the fluid's, to round-off, as with
-// every law (tests/unit/test_coupled.cpp Coupled.MixtureMomentumConserved, the same bound). A table that
-// varies with phi and the cell slip, random particle velocities (0.05 m/s rms) so that the cell slips and the
-// shifts differ.
+// (e) The mixture momentum with the drift law: the fluid gets B and B (v + d), the particle beta (u - v - d) with
+// the same d = H s~ (frozen at the deposit): its impulse is minus the fluid's, to round-off, as with every law
+// (tests/unit/test_coupled.cpp Coupled.MixtureMomentumConserved, the same bound). A table that varies with phi and
+// the cell slip, random particle velocities (0.05 m/s rms) so that the cell slips and the shifts differ.
 TEST(DriftCoupler, MixtureMomentumConservedWithTheDriftLaw) {
   const cgd::Scene scene = make_scene({"particles.solids_fraction=0.2", "particles.velocity_rms=0.05"});
   MPI_Comm comm = MPI_COMM_SELF;
@@ -321,21 +306,19 @@ TEST(DriftCoupler, MixtureMomentumConservedWithTheDriftLaw) {
   std::iota(ids.begin(), ids.end(), 0);
   dem.set_particles(ids, placement.position, placement.velocity, {});
   const double volume = scene.domain.size_m[0] * scene.domain.size_m[1] * scene.domain.size_m[2];
-  const double phi =
-      static_cast<double>(scene.derived.particle_count) * scene.derived.particle_volume_m3 / volume;
+  const double phi = static_cast<double>(scene.derived.particle_count) * scene.derived.particle_volume_m3 / volume;
   const double rho_mix = phi * scene.particles.density_kg_m3 + (1.0 - phi) * fc.density_kg_m3;
   cgd::fluid::FluidSettings fs;
   fs.density_kg_m3 = fc.density_kg_m3;
   fs.viscosity_Pa_s = fc.viscosity_Pa_s;
   for (int d = 0; d < 3; ++d) fs.body_force_per_fluid_volume_N_m3[d] = (fc.density_kg_m3 - rho_mix) * g[d];
   cgd::fluid::FluidSolver fluid(grid, fs);
-  cgd::coupling::CouplerSettings cs = coupler_settings(
-      DragLaw::Drift, drift_model({0.1, 0.3}, {0.0, 0.5, 1.0}, {0.2, 0.5, 0.7, 0.4, 0.6, 0.9}));
+  cgd::coupling::CouplerSettings cs =
+      coupler_settings(DragLaw::Drift, drift_model({0.1, 0.3}, {0.0, 0.5, 1.0}, {0.2, 0.5, 0.7, 0.4, 0.6, 0.9}));
   cs.particle_volume_m3 = scene.derived.particle_volume_m3;
   cs.particle_mass_kg = scene.derived.parcel_mass_kg;
   cs.filtered.filter_width_m = std::cbrt(grid.cell_volume());
-  for (int d = 0; d < 3; ++d)
-    cs.particle_body_accel[d] = g[d] * (1.0 - rho_mix / scene.particles.density_kg_m3);
+  for (int d = 0; d < 3; ++d) cs.particle_body_accel[d] = g[d] * (1.0 - rho_mix / scene.particles.density_kg_m3);
   cgd::coupling::Coupler coupler(cs, grid);
   const double dt_cap = 0.5 * scene.particles.density_kg_m3 /
                         cgd::beta_p(DragLaw::Beetstra, cs.drag_params, 1.0 - cs.void_fraction_floor, 0.0);
@@ -375,17 +358,15 @@ TEST(DriftCoupler, MixtureMomentumConservedWithTheDriftLaw) {
       max_fluid = std::max(max_fluid, std::abs(Pf[d]));
     }
   }
-  std::printf(
-      "[ drift momentum ] %d fluid steps: max |P - P0| = %.2e kg m/s, %.2e of the scale %.2e; largest fluid "
-      "momentum %.2e; largest shift H s~ %.2e m/s\n",
-      fluid_steps, drift, drift / scale, scale, max_fluid, max_shift);
+  std::printf("[ drift momentum ] %d fluid steps: max |P - P0| = %.2e kg m/s, %.2e of the scale %.2e; largest fluid "
+              "momentum %.2e; largest shift H s~ %.2e m/s\n",
+              fluid_steps, drift, drift / scale, scale, max_fluid, max_shift);
   EXPECT_LT(drift, fluid_steps * 10 * 2.2e-16 * scale);
   EXPECT_GT(max_fluid, 1e6 * drift);
   EXPECT_GT(max_shift, 1e-3);  // the shift acts: the test is not the micro law's
 }
 
-// ---- (f) the scene
-// ------------------------------------------------------------------------------------------
+// ---- (f) the scene ------------------------------------------------------------------------------------------
 
 TEST(DriftScene, ModelAndDriftRefuseEachOthersFiles) {
   TempDir dir;
@@ -401,9 +382,8 @@ TEST(DriftScene, ModelAndDriftRefuseEachOthersFiles) {
     ADD_FAILURE() << "fluid.drag = \"model\" took a drift table";
   } catch (const cgd::InputError& e) {
     const std::string what = e.what();
-    for (const std::string& part :
-         {std::string("drift_test.toml"), std::string("fluid.drag_model"), drift_file,
-          std::string("drift_table"), std::string("fluid.drag = \"drift\"")})
+    for (const std::string& part : {std::string("drift_test.toml"), std::string("fluid.drag_model"), drift_file,
+                                   std::string("drift_table"), std::string("fluid.drag = \"drift\"")})
       EXPECT_NE(what.find(part), std::string::npos) << part << " not in: " << what;
   }
   const char* src = std::getenv("CGD_SOURCE_DIR");
@@ -414,7 +394,7 @@ TEST(DriftScene, ModelAndDriftRefuseEachOthersFiles) {
   } catch (const cgd::InputError& e) {
     const std::string what = e.what();
     for (const std::string& part : {std::string("fluid.drag_model"), shipped, std::string("drift_table"),
-                                    std::string("fluid.drag = \"model\"")})
+                                   std::string("fluid.drag = \"model\"")})
       EXPECT_NE(what.find(part), std::string::npos) << part << " not in: " << what;
   }
   try {
@@ -424,11 +404,10 @@ TEST(DriftScene, ModelAndDriftRefuseEachOthersFiles) {
     EXPECT_NE(std::string(e.what()).find("fluid.drag_model is missing"), std::string::npos) << e.what();
   }
   // resolved runs refuse it as every filtered law
-  EXPECT_THROW(
-      cgd::load_scene_from_string(cgd::testing::test_scene_text("unit_suspension.toml"), "x.toml",
-                                  {"fluid.drag=\"drift\"", "fluid.drag_model=\"" + drift_file + "\""},
-                                  cgd::kResolvedRunAccepts),
-      cgd::InputError);
+  EXPECT_THROW(cgd::load_scene_from_string(cgd::testing::test_scene_text("unit_suspension.toml"), "x.toml",
+                                           {"fluid.drag=\"drift\"", "fluid.drag_model=\"" + drift_file + "\""},
+                                           cgd::kResolvedRunAccepts),
+               cgd::InputError);
   // the evaluator's own check, for code that sets the law up by hand
   cgd::FilteredDragSetup setup;
   setup.model = ok.fluid->drag_model;
@@ -440,14 +419,12 @@ TEST(DriftScene, ModelAndDriftRefuseEachOthersFiles) {
   EXPECT_THROW(cgd::check_filtered_setup(DragLaw::Drift, setup), cgd::InputError);
 }
 
-// ---- (g) the fitter
-// -----------------------------------------------------------------------------------------
+// ---- (g) the fitter -----------------------------------------------------------------------------------------
 
-/// A filtered file with one grid (4 across, 7.5 d_p) and its drift sums, 4 phi bins of 0.05 and 4 slip bins
-/// of 0.25 u_t, two snapshots (the second empty), designed for the filling rule:
-///   phi bin 0: phi-only H_grid 0.2 (N = 40 + 40 per snapshot... of M = 50 + 50), no drift bin with >= 100
-///   samples; phi bin 1: slip 0 has 200 samples but |S| = 10 < 0.25 x 100 (misaligned), slip 1 H = 30/100,
-///   slip 2 H = 50/100,
+/// A filtered file with one grid (4 across, 7.5 d_p) and its drift sums, 4 phi bins of 0.05 and 4 slip bins of 0.25
+/// u_t, two snapshots (the second empty), designed for the filling rule:
+///   phi bin 0: phi-only H_grid 0.2 (N = 40 + 40 per snapshot... of M = 50 + 50), no drift bin with >= 100 samples;
+///   phi bin 1: slip 0 has 200 samples but |S| = 10 < 0.25 x 100 (misaligned), slip 1 H = 30/100, slip 2 H = 50/100,
 ///              slip 3 empty;
 ///   phi bin 2: slip 0 H = 10/100, slip 3 H = 70/100, slips 1, 2 below min_count;
 ///   phi bin 3: 50 samples: not a row.
@@ -530,8 +507,7 @@ cgd::schema::Filtered drift_filtered(const cgd::Scene& scene) {
 
 TEST(DriftFit, TableIsNOverSWhereMeasuredAndFilledByTheRuleElsewhere) {
   TempDir dir;
-  const cgd::Scene scene =
-      cgd::load_scene_from_string(cgd::testing::test_scene_text("demo_box.toml"), "demo.toml");
+  const cgd::Scene scene = cgd::load_scene_from_string(cgd::testing::test_scene_text("demo_box.toml"), "demo.toml");
   const std::string filtered = (dir / "filtered.h5").string(), model = (dir / "drift.h5").string();
   cgd::schema::write_filtered(filtered, &scene, drift_filtered(scene));
   // the filtered file's round trip: the drift sums and the slip bins come back
@@ -558,11 +534,10 @@ TEST(DriftFit, TableIsNOverSWhereMeasuredAndFilledByTheRuleElsewhere) {
   ASSERT_EQ(t.slip.size(), 4u);
   EXPECT_NEAR(t.slip[0], 0.125, 1e-15);
   EXPECT_NEAR(t.slip[3], 0.875, 1e-15);
-  const std::vector<double> expect = {
-      0.2, 0.2, 0.2, 0.2,   // row 0: its phi-only H_grid 1 - 80/100
-      0.3, 0.3, 0.5, 0.3,   // row 1: misaligned slip 0 -> slip 1; empty slip 3, beyond
-                            // the last measured: min(0.5, its phi-only 0.3)
-      0.1, 0.1, 0.7, 0.7};  // row 2: slip 1 -> 0 (the lower on a tie... nearest), 2 -> 3
+  const std::vector<double> expect = {0.2, 0.2, 0.2, 0.2,   // row 0: its phi-only H_grid 1 - 80/100
+                                      0.3, 0.3, 0.5, 0.3,   // row 1: misaligned slip 0 -> slip 1; empty slip 3, beyond
+                                                            // the last measured: min(0.5, its phi-only 0.3)
+                                      0.1, 0.1, 0.7, 0.7};  // row 2: slip 1 -> 0 (the lower on a tie... nearest), 2 -> 3
   ASSERT_EQ(t.H.size(), expect.size());
   for (std::size_t k = 0; k < expect.size(); ++k) EXPECT_NEAR(t.H[k], expect[k], 1e-14) << "entry " << k;
   const cgd::schema::DragModelFile raw = cgd::schema::read_drag_model(model);
@@ -578,14 +553,11 @@ TEST(DriftFit, TableIsNOverSWhereMeasuredAndFilledByTheRuleElsewhere) {
   EXPECT_TRUE(cgd::model_calibration_warnings(m, 7.5 * kD).empty());
   EXPECT_EQ(cgd::model_calibration_warnings(m, 10 * kD).size(), 1u);
   // refusals: another grid, a file without drift sums, no measured bin
-  EXPECT_THROW(cgd::fit::write_drift_table_model((dir / "x.h5").string(), {f}, 5, 100, 0.25, scene),
-               cgd::InputError);
-  EXPECT_THROW(cgd::fit::write_drift_table_model((dir / "x.h5").string(), {f}, 4, 1000, 0.25, scene),
-               cgd::InputError);
+  EXPECT_THROW(cgd::fit::write_drift_table_model((dir / "x.h5").string(), {f}, 5, 100, 0.25, scene), cgd::InputError);
+  EXPECT_THROW(cgd::fit::write_drift_table_model((dir / "x.h5").string(), {f}, 4, 1000, 0.25, scene), cgd::InputError);
   cgd::fit::FilteredFile bare = f;
   bare.grids[0].drift.reset();
-  EXPECT_THROW(cgd::fit::write_drift_table_model((dir / "x.h5").string(), {bare}, 4, 100, 0.25, scene),
-               cgd::InputError);
+  EXPECT_THROW(cgd::fit::write_drift_table_model((dir / "x.h5").string(), {bare}, 4, 100, 0.25, scene), cgd::InputError);
   // pooling two copies with twice the min count: the same table (sums and counts double, ratios unchanged)
   const std::string pooled = (dir / "pooled.h5").string();
   cgd::fit::write_drift_table_model(pooled, {f, f}, 4, 200, 0.25, scene);
@@ -594,12 +566,10 @@ TEST(DriftFit, TableIsNOverSWhereMeasuredAndFilledByTheRuleElsewhere) {
     EXPECT_NEAR(cgd::load_drag_model(pooled).drift_table.H[k], expect[k], 1e-14);
 }
 
-// ---- (h) damaged drift tables
-// -------------------------------------------------------------------------------
+// ---- (h) damaged drift tables -------------------------------------------------------------------------------
 
 /// A copy of `source` at `target` changed by `body` (the HDF5 file id).
-void damaged_copy(const std::string& source, const std::string& target,
-                  const std::function<void(hid_t)>& body) {
+void damaged_copy(const std::string& source, const std::string& target, const std::function<void(hid_t)>& body) {
   fs::copy_file(source, target, fs::copy_options::overwrite_existing);
   const hid_t f = H5Fopen(target.c_str(), H5F_ACC_RDWR, H5P_DEFAULT);
   ASSERT_GE(f, 0);
@@ -622,8 +592,7 @@ TEST(DriftModelFile, DamagedTablesAreRefusedNamingTheDataset) {
   const std::string good = (dir / "good.h5").string();
   cgd::testing::write_drift_model(good, micro, {0.0, 0.5}, {0.0, 1.0, 2.0}, {0.1, 0.2, 0.3, 0.4, 0.5, 0.6});
   EXPECT_TRUE(cgd::load_drag_model(good).drift);
-  auto refused = [&](const std::string& name, const std::function<void(hid_t)>& body,
-                     const std::string& says) {
+  auto refused = [&](const std::string& name, const std::function<void(hid_t)>& body, const std::string& says) {
     const std::string path = (dir / (name + ".h5")).string();
     damaged_copy(good, path, body);
     try {
@@ -635,34 +604,16 @@ TEST(DriftModelFile, DamagedTablesAreRefusedNamingTheDataset) {
       EXPECT_NE(what.find(says), std::string::npos) << name << ": " << what;
     }
   };
-  refused(
-      "no_H", [](hid_t f) { H5Ldelete(f, "/drift_table/H", H5P_DEFAULT); }, "/drift_table/H");
-  refused(
-      "no_group", [](hid_t f) { H5Ldelete(f, "/drift_table", H5P_DEFAULT); }, "/drift_table");
-  refused(
-      "nan_H",
-      [](hid_t f) {
-        write_dataset(f, "/drift_table/H", {0.1, NAN, 0.3, 0.4, 0.5, 0.6}, {2, 3});
-      },
-      "/drift_table/H");
-  refused(
-      "shape_H",
-      [](hid_t f) {
-        write_dataset(f, "/drift_table/H", {0.1, 0.2, 0.3, 0.4, 0.5, 0.6}, {3, 2});
-      },
-      "/drift_table/H");
-  refused(
-      "slip_order",
-      [](hid_t f) {
-        write_dataset(f, "/drift_table/slip", {0.0, 2.0, 1.0}, {3});
-      },
-      "strictly increasing");
-  refused(
-      "count_float",
-      [](hid_t f) {
-        write_dataset(f, "/drift_table/count", std::vector<double>(6, 1.0), {2, 3});
-      },
-      "/drift_table/count");
+  refused("no_H", [](hid_t f) { H5Ldelete(f, "/drift_table/H", H5P_DEFAULT); }, "/drift_table/H");
+  refused("no_group", [](hid_t f) { H5Ldelete(f, "/drift_table", H5P_DEFAULT); }, "/drift_table");
+  refused("nan_H", [](hid_t f) { write_dataset(f, "/drift_table/H", {0.1, NAN, 0.3, 0.4, 0.5, 0.6}, {2, 3}); },
+          "/drift_table/H");
+  refused("shape_H", [](hid_t f) { write_dataset(f, "/drift_table/H", {0.1, 0.2, 0.3, 0.4, 0.5, 0.6}, {3, 2}); },
+          "/drift_table/H");
+  refused("slip_order", [](hid_t f) { write_dataset(f, "/drift_table/slip", {0.0, 2.0, 1.0}, {3}); },
+          "strictly increasing");
+  refused("count_float", [](hid_t f) { write_dataset(f, "/drift_table/count", std::vector<double>(6, 1.0), {2, 3}); },
+          "/drift_table/count");
 }
 
 }  // namespace

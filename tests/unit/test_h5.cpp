@@ -292,13 +292,10 @@ TEST_F(H5Test, AtomicWriteLeavesOnlyTheCompleteFile) {
 // cut short, is an InputError.
 TEST_F(H5Test, SealedFileIsRefusedOnceAByteChangesOrItIsCutShort) {
   const std::string final_path = path("sealed.h5");
-  cgd::h5::write_atomically(
-      final_path, MPI_COMM_WORLD,
-      [&](File& f) {
-        const std::vector<double> x{1, 2, 3, 4};
-        f.write_replicated("/data", x, {4});
-      },
-      cgd::h5::Seal::Yes);
+  cgd::h5::write_atomically(final_path, MPI_COMM_WORLD, [&](File& f) {
+    const std::vector<double> x{1, 2, 3, 4};
+    f.write_replicated("/data", x, {4});
+  }, cgd::h5::Seal::Yes);
   EXPECT_TRUE(File::open_read(final_path, MPI_COMM_WORLD).sealed());
   std::string problem;
   EXPECT_EQ(cgd::h5::check_seal(final_path, &problem), cgd::h5::SealState::Valid) << problem;
@@ -312,9 +309,8 @@ TEST_F(H5Test, SealedFileIsRefusedOnceAByteChangesOrItIsCutShort) {
   }
   fs::copy_file(final_path, short_file);
   fs::resize_file(short_file, size - 100);
-  for (const auto& [file, expected] :
-       {std::pair<std::string, std::string>{damaged, "do not match the checksum"},
-        {short_file, "cut short"}}) {
+  for (const auto& [file, expected] : {std::pair<std::string, std::string>{damaged, "do not match the checksum"},
+                                       {short_file, "cut short"}}) {
     try {
       File::open_read(file, MPI_COMM_WORLD);
       ADD_FAILURE() << file << ": no InputError";
