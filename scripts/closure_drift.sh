@@ -21,7 +21,9 @@
 # Environment: BUILD (default build), NICE (default 0), CELLS (default 4), DRIFT_FILTER_ARGS (more cgd-filter
 # options, e.g. the slip bins), OWN_DEPOSIT (default true; false: every coarse run's drag leaves the parcel's own
 # deposit out of its phi, fluid.drag_own_deposit = false, docs/closure.md; the runs go to DIR/noself, the tables
-# and filtered files are shared).
+# and filtered files are shared), TABLE_CELLS (default CELLS: the grid the four tables are fitted on; a coarser one,
+# e.g. 3 with CELLS=4, asks the closure for the structures up to that grid's cell too, the wider filter of
+# docs/closure.md; its tables and runs go to DIR/t<TABLE_CELLS>, the filtered files hold both grids).
 set -euo pipefail
 repo=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
 out=${1:?usage: closure_drift.sh OUT [PHIS] [ALPHAS] [SEEDS] [CLOSURES]}
@@ -32,6 +34,8 @@ IFS=, read -r -a closures <<< "${5:-driftheld,driftown,tableheld,tableown,radl}"
 build=${BUILD:-$repo/build}
 nice_level=${NICE:-0}
 cells=${CELLS:-4}
+table_cells=${TABLE_CELLS:-$cells}
+[[ $table_cells =~ ^[1-9][0-9]*$ ]] || { echo "closure_drift.sh: TABLE_CELLS=$table_cells is not a positive integer" >&2; exit 2; }
 read -r -a drift_filter_args <<< "${DRIFT_FILTER_ARGS:-}"
 from_tref=20
 mk() { make -s -f "$repo/Makefile.pipeline" PROFILE=half "$@"; }
@@ -42,9 +46,14 @@ dx=$(python3 -c "print($box_dp/$cells)")
 dir=$out/closure_drift
 own_deposit=${OWN_DEPOSIT:-true}
 case $own_deposit in true | false) ;; *) echo "closure_drift.sh: OWN_DEPOSIT=$own_deposit: allowed true, false" >&2; exit 2 ;; esac
-runs_dir=$dir
-[ "$own_deposit" = false ] && runs_dir=$dir/noself
-mkdir -p "$dir" "$runs_dir"
+# the tables (and the runs that use them) of a table grid other than the run's: DIR/t<TABLE_CELLS>
+tables_dir=$dir
+[ "$table_cells" = "$cells" ] || tables_dir=$dir/t$table_cells
+runs_dir=$tables_dir
+[ "$own_deposit" = false ] && runs_dir=$tables_dir/noself
+filter_grids=$cells
+[ "$table_cells" = "$cells" ] || filter_grids=$cells,$table_cells
+mkdir -p "$dir" "$tables_dir" "$runs_dir"
 say() { echo "[closure_drift] $*" >&2; }
 
 # every finished resolved run, filtered on its own (so that any pool can be formed from the files)
@@ -59,29 +68,32 @@ for phi in "${phis[@]}"; do
 done
 phi_of() { local r=${1#phi}; echo "${r%%_s*}"; }
 for r in "${runs[@]}"; do
-  [ -f "$dir/filtered_$r.h5" ] && continue
-  say "filter $r on the $cells-cell grid"
-  nice -n "$nice_level" "$build/cgd-filter" "$out/generate/$r" --from-tref $from_tref --grids "$cells" --samples 0 \
-    "${drift_filter_args[@]}" --force --quiet -o "$dir/filtered_$r.h5"
+  filtered=$dir/filtered_$r.h5
+  [ "$table_cells" = "$cells" ] || filtered=$tables_dir/filtered_$r.h5
+  [ -f "$filtered" ] && continue
+  say "filter $r on the grids $filter_grids"
+  nice -n "$nice_level" "$build/cgd-filter" "$out/generate/$r" --from-tref $from_tref --grids "$filter_grids" \
+    --samples 0 "${drift_filter_args[@]}" --force --quiet -o "$filtered"
 done
+filtered_of() { if [ "$table_cells" = "$cells" ]; then echo "$dir/filtered_$1.h5"; else echo "$tables_dir/filtered_$1.h5"; fi; }
 # the tables: own = the runs at phi; held = every other run
 for phi in "${phis[@]}"; do
   own=() held=()
   for r in "${runs[@]}"; do
-    if [ "$(phi_of "$r")" = "$phi" ]; then own+=("$dir/filtered_$r.h5"); else held+=("$dir/filtered_$r.h5"); fi
+    if [ "$(phi_of "$r")" = "$phi" ]; then own+=("$(filtered_of "$r")"); else held+=("$(filtered_of "$r")"); fi
   done
   [ ${#held[@]} -gt 0 ] || { echo "closure_drift.sh: no run besides phi = $phi to fit a held-out table on" >&2; exit 2; }
   fit() {  # output, option, files...
     local o=$1 opt=$2
     shift 2
     [ -f "$o" ] && return 0
-    "$build/cgd-fit" "$@" "$opt" "$cells" --force -o "$o" > "${o%.h5}.report.txt" 2>&1 ||
+    "$build/cgd-fit" "$@" "$opt" "$table_cells" --force -o "$o" > "${o%.h5}.report.txt" 2>&1 ||
       { cat "${o%.h5}.report.txt" >&2; exit 1; }
   }
-  fit "$dir/driftown_phi$phi.h5" --drift-table "${own[@]}"
-  fit "$dir/driftheld_phi$phi.h5" --drift-table "${held[@]}"
-  fit "$dir/tableown_phi$phi.h5" --grid-table "${own[@]}"
-  fit "$dir/tableheld_phi$phi.h5" --grid-table "${held[@]}"
+  fit "$tables_dir/driftown_phi$phi.h5" --drift-table "${own[@]}"
+  fit "$tables_dir/driftheld_phi$phi.h5" --drift-table "${held[@]}"
+  fit "$tables_dir/tableown_phi$phi.h5" --grid-table "${own[@]}"
+  fit "$tables_dir/tableheld_phi$phi.h5" --grid-table "${held[@]}"
   ref=$dir/resolved_phi$phi.h5
   [ -f "$ref" ] || "$build/cgd-coarse" --summarise "$out/generate/phi$phi" --from-tref $from_tref --force -o "$ref" > /dev/null
 done
@@ -106,8 +118,8 @@ for phi in "${phis[@]}"; do
       for c in "${closures[@]}"; do
         case $c in
           driftheld | driftown)
-            args=(--set fluid.drag=drift --set fluid.drag_model="$dir/${c}_phi$phi.h5" --set fluid.parcel_correction=false) ;;
-          tableheld | tableown) args=(--model "$dir/${c}_phi$phi.h5" --set fluid.parcel_correction=false) ;;
+            args=(--set fluid.drag=drift --set fluid.drag_model="$tables_dir/${c}_phi$phi.h5" --set fluid.parcel_correction=false) ;;
+          tableheld | tableown) args=(--model "$tables_dir/${c}_phi$phi.h5" --set fluid.parcel_correction=false) ;;
           radl) args=(--set fluid.drag=radl2014) ;;  # with the paper's c_corr(alpha), as the pipeline runs it
           *) echo "closure_drift.sh: closure $c is not one of driftheld, driftown, tableheld, tableown, radl" >&2; exit 2 ;;
         esac

@@ -41,6 +41,22 @@ Per run (means over the window's snapshots; slips over u_t):
                 gradient, as above) and the rest 1 - drag - pressure: contacts and the mean acceleration
                 (~0 over all particles of a stationary run, whose contacts sum to zero). The hypothesis it
                 tests: the coarse run's dense cells are held by another force than the resolved run's.
+  momentum flux per phi bin: the particle phase's momentum flux between the cells, as forces in the same units
+                (the y row of the divergence, central differences on the periodic coarse grid of cell size h:
+                -(D_x T_xy + D_y T_yy + D_z T_zy), D_j T = (T[c + e_j] - T[c - e_j]) / 2h_j, zero along an axis of
+                fewer than 3 cells), summed over the bin's cells over the weight rho_p g of their particles:
+                  sub-grid    T = R_c = rho_p (sum_i V_i v_i,j v_i,y - P_c,j P_c,y / M_c) / V_c, the stress of the
+                              particles' velocity fluctuations about their cell's mean velocity (M_c = sum V_i,
+                              P_c = sum V_i v_i): the filtered particle-phase kinetic stress, which a coarse run
+                              whose parcels move with their cell cannot carry;
+                  grid-scale  T = rho_p phi_c v_c,j v_c,y, the flux of the cell-mean motion (what a coarse run
+                              carries if it builds the same cells);
+                  residual    rest - sub-grid - grid-scale: contacts minus the cells' momentum change in time
+                              (the one term a snapshot cannot give: ~0 for a bin whose cells keep their momentum).
+                A particle's Lagrangian acceleration over a cell is the Eulerian change plus the divergence of both
+                fluxes, so rest = contacts + sub-grid + grid-scale - unsteady. The hypothesis it tests: the
+                resolved run's dense cells are loaded by momentum carried into them at sub-grid scale (a
+                particle-phase stress a coarse closure must supply), not by drag.
 
 usage: /usr/bin/python3 tools/closure_diagnostics.py --resolved RUN [--resolved RUN]... [--coarse RUN]...
            --cells N [--from-tref T] [--coarse-from-tref T] [--bin 0.02] [-o PREFIX]
@@ -149,6 +165,7 @@ def snapshot_cells(path, n_cells, from_tref):
     ncell = grid[0] * grid[1] * grid[2]
     solids = np.bincount(flat, minlength=ncell) * vol
     momentum = np.bincount(flat, weights=v[:, 1], minlength=ncell) * vol
+    flux = particle_flux_shares(flat, v, vol, grid, hs, consts["rho_p"], consts["g"])
     # fluid: overlap-weighted volume sums onto the coarse cells (separable)
     wx = overlap_matrix(cells_f[0], spacing[0], origin[0], grid[0], hs[0])
     wy = overlap_matrix(cells_f[1], spacing[1], origin[1], grid[1], hs[1])
@@ -160,9 +177,43 @@ def snapshot_cells(path, n_cells, from_tref):
     weight = consts["rho_p"] * consts["g"]  # per unit particle volume
     return dict(flat=flat, solids=solids, momentum=momentum, e=e_c, eu=eu_c, cell_volume=cell_volume,
                 drag_share=beta * (u_p - v[:, 1]) / weight, pressure_share=-dpdy / weight,
+                subgrid_share=flux["subgrid"][flat], grid_share=flux["grid"][flat],
                 n=n, v_y=v[:, 1], v_mean=float(v[:, 1].mean()), dpdy_mean=float(dpdy.mean()),
                 u_domain=float(eu.sum() / eps.sum()), phi_mean=n * vol / float(np.prod(box)),
                 fine_volume=fine_volume, **consts)
+
+
+def divergence_y(t, grid, hs):
+    """y row of the divergence of the cell tensors t[j] (T_jy, j = x, y, z; flat arrays of the grid's cells):
+    central differences on the periodic grid, 0 along an axis of fewer than 3 cells (where c + 1 and c - 1 are
+    one cell or the cell itself)."""
+    shape = (grid[2], grid[1], grid[0])
+    out = np.zeros(shape)
+    for j, axis in ((0, 2), (1, 1), (2, 0)):
+        if grid[j] < 3:
+            continue
+        a = t[j].reshape(shape)
+        out += (np.roll(a, -1, axis=axis) - np.roll(a, 1, axis=axis)) / (2.0 * hs[j])
+    return out.reshape(-1)
+
+
+def particle_flux_shares(flat, v, vol, grid, hs, rho_p, g):
+    """Per coarse cell: the y force of the particle phase's sub-grid and grid-scale momentum fluxes (minus the y
+    row of their divergence) times the cell volume, over the weight rho_p g M_c of the cell's particles (0 in an
+    empty cell); see "momentum flux" in the module's doc."""
+    ncell = grid[0] * grid[1] * grid[2]
+    cell_volume = float(np.prod(hs))
+    m = np.bincount(flat, minlength=ncell) * vol
+    occupied = m > 0
+    p = [np.bincount(flat, weights=v[:, j], minlength=ncell) * vol for j in range(3)]
+    q = [np.bincount(flat, weights=v[:, j] * v[:, 1], minlength=ncell) * vol for j in range(3)]
+    safe = np.where(occupied, m, 1.0)
+    resolved = [np.where(occupied, p[j] * p[1] / safe, 0.0) for j in range(3)]
+    subgrid = [rho_p * (q[j] - resolved[j]) / cell_volume for j in range(3)]
+    gridscale = [rho_p * resolved[j] / cell_volume for j in range(3)]
+    weight = rho_p * g * safe
+    return {name: np.where(occupied, -divergence_y(t, grid, hs) * cell_volume / weight, 0.0)
+            for name, t in (("subgrid", subgrid), ("grid", gridscale))}
 
 
 def cell_velocities(snap):
@@ -182,7 +233,7 @@ def run_snapshots(run):
 
 def analyse(runs, n_cells, from_tref, bin_width):
     """Pooled figures of one or more runs (their window's snapshots)."""
-    phi_all, slip_all, drag_all, pressure_all, rows = [], [], [], [], []
+    phi_all, slip_all, drag_all, pressure_all, subgrid_all, grid_all, rows = [], [], [], [], [], [], []
     for run in runs:
         used = 0
         for path in run_snapshots(run):
@@ -200,6 +251,8 @@ def analyse(runs, n_cells, from_tref, bin_width):
             slip_all.append(slip_p)
             drag_all.append(snap["drag_share"])
             pressure_all.append(snap["pressure_share"])
+            subgrid_all.append(snap["subgrid_share"])
+            grid_all.append(snap["grid_share"])
             domain = (snap["u_domain"] - snap["v_mean"]) / snap["u_t"]
             local = float(np.sum(weight * slip_c))
             weight_mix = (snap["rho_p"] * snap["phi_mean"] + snap["rho_f"] * (1 - snap["phi_mean"])) * snap["g"]
@@ -211,6 +264,8 @@ def analyse(runs, n_cells, from_tref, bin_width):
     slip_p = np.concatenate(slip_all)
     drag_p = np.concatenate(drag_all)
     pressure_p = np.concatenate(pressure_all)
+    subgrid_p = np.concatenate(subgrid_all)
+    grid_p = np.concatenate(grid_all)
     phi_mean = rows[0]["phi_mean"]
     mean = lambda k: float(np.mean([r[k] for r in rows]))  # noqa: E731
     stderr = lambda k: float(np.std([r[k] for r in rows], ddof=1) / math.sqrt(len(rows))) if len(rows) > 1 else math.nan  # noqa: E731
@@ -222,17 +277,26 @@ def analyse(runs, n_cells, from_tref, bin_width):
         bins.append(dict(lo=edges[b], hi=edges[b + 1], fraction=float(sel.mean()),
                          slip=float(slip_p[sel].mean()) if sel.any() else math.nan,
                          drag=float(drag_p[sel].mean()) if sel.any() else math.nan,
-                         pressure=float(pressure_p[sel].mean()) if sel.any() else math.nan))
+                         pressure=float(pressure_p[sel].mean()) if sel.any() else math.nan,
+                         subgrid=float(subgrid_p[sel].mean()) if sel.any() else math.nan,
+                         grid=float(grid_p[sel].mean()) if sel.any() else math.nan))
     return dict(snapshots=len(rows), phi=phi_mean, domain=mean("domain"), domain_err=stderr("domain"),
                 local=mean("local"), drift=mean("drift"), drift_err=stderr("drift"), support=mean("support"),
                 phi_pw=float(phi_p.mean()), phi_std=float(phi_p.std()), phi_p99=float(np.percentile(phi_p, 99)),
                 tail=float(np.mean(phi_p > 2.2 * phi_mean)), bins=bins, phi_p=phi_p,
-                drag=float(drag_p.mean()), pressure=float(pressure_p.mean()))
+                drag=float(drag_p.mean()), pressure=float(pressure_p.mean()),
+                subgrid=float(subgrid_p.mean()), grid=float(grid_p.mean()))
 
 
 def balance(r):
     """drag / pressure / rest of a bin (or of a run's particles): each a share of the weight."""
     return f"{r['drag']:.2f} / {r['pressure']:.2f} / {1 - r['drag'] - r['pressure']:+.2f}"
+
+
+def fluxes(r):
+    """sub-grid / grid-scale / residual of a bin (or of a run's particles): each a share of the weight."""
+    rest = 1 - r["drag"] - r["pressure"]
+    return f"{r['subgrid']:+.2f} / {r['grid']:+.2f} / {rest - r['subgrid'] - r['grid']:+.2f}"
 
 
 def bin_table(results, cell, first=None):
@@ -267,6 +331,10 @@ def tables(results, n_cells, from_tref, coarse_from_tref=None):
     out += ["", "Vertical force balance per phi bin, in units of the particles' weight: drag / pressure / rest "
             "(contacts and mean acceleration); the first row over all particles", ""]
     out += bin_table(results, balance, first=("all", results))
+    out += ["", "Particle-phase momentum flux between the cells per phi bin, in the same units: sub-grid (the "
+            "particles' velocity fluctuations in their cell) / grid-scale (the cells' mean motion) / residual (rest - "
+            "both: contacts minus the cells' momentum change)", ""]
+    out += bin_table(results, fluxes, first=("all", results))
     return "\n".join(out)
 
 

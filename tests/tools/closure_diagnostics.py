@@ -11,6 +11,13 @@ x = 3.5 m (wrapped to 1.5: v_y = -0.4); u_t = 1 m/s. Then
   force balance (beta_p = 1000 kg/(m^3 s), the particles' fluid velocity u_y = 1 m/s, weight rho_p g = 10^4 N/m^3):
   drag shares 0.09, 0.08, 0.07 (cube 0) and 0.14 (cube 7), pressure shares 0.006995 (x3) and 0.004995, so the
   phi = 0.01 bin 0.14 / 0.004995, the phi = 0.03 bin 0.08 / 0.006995, all particles 0.095 / 0.006495.
+The particle-phase momentum flux, on a 1 x 4 x 1 m column seen as 4 cells of 1 m along y (x and z have one cell:
+no derivative), particles of 0.01 m^3, rho_p g = 10^4 N/m^3: cell 0 holds v_y = 1 and 3, cell 1 v_y = -1, cell 2
+nothing, cell 3 v = (1, 0, 0) and (-1, 2, 0). Sub-grid stress R_yy = rho_p (sum V v_y^2 - P_y^2 / M) / V_c =
+20, 0, 0, 20 Pa; grid-scale rho_p P_y^2 / (M V_c) = 80, 10, 0, 20 Pa. Minus the central difference in y: sub-grid
+force 10, 10, -10, -10 N/m^3, grid-scale 5, 40, -40 (cell 2 empty), -40; over the cells' particles' weight (200,
+100, 200 N): sub-grid shares 0.05, 0.1, -0.05, grid-scale 0.025, 0.4, -0.2. In phi bins of 0.015 (cell 1 at
+phi 0.01, cells 0 and 3 at 0.02): sub-grid 0.1 and 0, grid-scale 0.4 and -0.0875.
 On one cell the drift is 0 (local slip = domain slip). A snapshot before --from-tref (different numbers)
 must be left out; the fine-to-coarse overlap of a grid that
 does not divide the coarse one (3 fine cells on 2 coarse); the refusals (a missing dataset, cells more than 10 %
@@ -73,6 +80,30 @@ def snapshot(path, time, vy, box=(2.0, 2.0, 2.0), drop=None):
             fl["eps_velocity"] = eu
 
 
+def column_snapshot(path):
+    """The 1 x 4 x 1 m column of the momentum-flux check (the doc above)."""
+    x = np.array([[0.5, 0.2, 0.5], [0.5, 0.7, 0.5], [0.5, 1.5, 0.5], [0.5, 3.2, 0.5], [0.5, 3.8, 0.5]])
+    v = np.array([[0, 1.0, 0], [0, 3.0, 0], [0, -1.0, 0], [1.0, 0, 0], [-1.0, 2.0, 0]])
+    eps = np.full((2, 8, 2), 0.9)
+    eu = np.zeros((2, 8, 2, 3))
+    with h5py.File(path, "w") as f:
+        f.attrs["cgd_format"] = "snapshot"
+        f.attrs["time"] = 2.0
+        p = f.create_group("params").attrs
+        p["box_size_m"] = np.array([1.0, 4.0, 1.0])
+        p["particle_volume_m3"], p["parcel_size"], p["u_t_m_s"], p["t_ref_s"] = 0.01, 1.0, 1.0, 1.0
+        p["density_kg_m3"], p["fluid_density_kg_m3"], p["gravity_m_s2"] = 1000.0, 1.0, np.array([0.0, -10.0, 0.0])
+        parts = f.create_group("particles")
+        parts.attrs["pressure_gradient_mean"] = np.zeros(3)
+        for name, a in (("position", x), ("velocity", v), ("pressure_gradient", np.zeros((5, 3))),
+                        ("fluid_velocity", np.zeros((5, 3))), ("drag_coefficient", np.zeros(5))):
+            parts[name] = a
+        fl = f.create_group("fluid")
+        fl.attrs["cells"], fl.attrs["spacing"], fl.attrs["origin"] = np.array([2, 8, 2]), np.full(3, 0.5), np.zeros(3)
+        fl["void_fraction"] = eps
+        fl["eps_velocity"] = eu
+
+
 with tempfile.TemporaryDirectory() as tmp:
     run = os.path.join(tmp, "run")
     os.makedirs(os.path.join(run, "snapshots"))
@@ -99,6 +130,23 @@ with tempfile.TemporaryDirectory() as tmp:
           f"({b0['drag']}, {b0['pressure']}, {b1['drag']}, {b1['pressure']}, {r['drag']}, {r['pressure']})")
     r1 = cd.analyse([run], 1, 1.0, 0.02)  # one cell: the local slip is the domain slip, no drift
     check(abs(r1["drift"]) < 1e-12 and abs(r1["local"] - domain) < 1e-12, f"one cell: drift 0 ({r1['drift']})")
+    column = os.path.join(tmp, "column")
+    os.makedirs(os.path.join(column, "snapshots"))
+    column_snapshot(os.path.join(column, "snapshots", "snap_1.h5"))
+    snap = cd.snapshot_cells(os.path.join(column, "snapshots", "snap_1.h5"), 1, 1.0)
+    want_sub, want_grid = [0.05, 0.05, 0.1, -0.05, -0.05], [0.025, 0.025, 0.4, -0.2, -0.2]
+    check(np.allclose(snap["subgrid_share"], want_sub, rtol=0, atol=1e-12) and
+          np.allclose(snap["grid_share"], want_grid, rtol=0, atol=1e-12),
+          f"momentum flux per particle: sub-grid {want_sub}, grid-scale {want_grid} "
+          f"({snap['subgrid_share'].tolist()}, {snap['grid_share'].tolist()})")
+    rc = cd.analyse([column], 1, 1.0, 0.015)
+    c0, c1 = rc["bins"][0], rc["bins"][1]
+    check(abs(c0["subgrid"] - 0.1) < 1e-12 and abs(c0["grid"] - 0.4) < 1e-12 and abs(c1["subgrid"]) < 1e-12 and
+          abs(c1["grid"] + 0.0875) < 1e-12,
+          f"momentum flux per bin: 0.1 / 0.4 at phi 0.01, 0 / -0.0875 at 0.02 ({c0['subgrid']}, {c0['grid']}, "
+          f"{c1['subgrid']}, {c1['grid']})")
+    check(abs(r["subgrid"]) < 1e-12 and abs(r["grid"]) < 1e-12,
+          f"two cells across: no flux derivative ({r['subgrid']}, {r['grid']})")
     w = cd.overlap_matrix(3, 2.0 / 3.0, 0.0, 2, 1.0)
     check(np.allclose(w, [[2 / 3, 1 / 3, 0], [0, 1 / 3, 2 / 3]]), f"overlap of 3 fine cells on 2 coarse ({w.tolist()})")
     out = subprocess.run([sys.executable, tool, "--resolved", run, "--cells", "2", "--from-tref", "1"],
