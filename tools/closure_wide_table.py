@@ -6,7 +6,7 @@ usage: tools/closure_wide_table.py DIR
 DIR holds resolved_phi<phi>.h5 (cgd-coarse --summarise of each resolved run over its sampling window) and the coarse
 runs phi<phi>_a<alpha>_<closure>_s<seed>/summary.h5, <closure> = g<G> (the perfect table of the grid of G cells
 across), r<r> (the fitted model at fluid.filter_to_grid_ratio = r) or one of the names of LABELS (the drift
-experiment's closures). Prints a markdown table: per phi, closure and
+experiment's closures and scripts/figure3_box.sh's). Prints a markdown table: per phi, closure and
 alpha, the relative error of the slip against the resolved run, mean over the seeds +- the standard error of that
 mean (the seeds' scatter / sqrt(n); one seed: the run's own batch-means error), and the seeds' count; then per
 closure the rms and the worst of the means over every phi and alpha.
@@ -28,6 +28,9 @@ LABELS = {
     "tableown": "phi-bar table of the run itself (perfect)",
     "radl": "radl2014",
     "micro": "micro (no correction)",
+    "halfbox": "half-box model (data/models/half_box.h5)",
+    "perfect": "perfect (the grid's own phi-bar table)",
+    "model": "model fitted in this box",
 }
 
 

@@ -1,0 +1,104 @@
+#!/usr/bin/env bash
+# The paper's Figure 3 in any box (issue 26; docs/coarse.md): coarse parcel runs on one grid with every closure a
+# user can take from this repository beside each other, against the resolved runs of that box.
+#
+# usage: scripts/figure3_box.sh OUT [PHIS=0.02] [ALPHAS=2,3,4,6,8] [SEEDS=1,2,3] [CLOSURES=micro,radl,halfbox,perfect,model]
+#   OUT: a `Makefile.pipeline PROFILE=$PROFILE` output directory with OUT/generate/phi<phi>/DONE for every phi.
+# Closures (the run directory's label):
+#   micro    the scene's micro law (Beetstra), no correction;
+#   radl     radl2014 with the paper's c_corr(alpha), as the pipeline runs it;
+#   halfbox  the shipped half-box model (data/models/half_box.h5, with its c_corr(alpha)): a model fitted in
+#            another box (53 x 213 x 53 d_p), used here at the same F = L_char/Delta rule;
+#   perfect  the grid's own a-priori correction as a table in phi-bar (cgd-fit --grid-table CELLS of the run's own
+#            filtered file), c_corr off, as the pipeline's perfect runs;
+#   model    OUT/fit/model.h5 when it exists (the model fitted in this box, with its c_corr(alpha) if fitted).
+# Each on the grid of CELLS cells across (default 4: the paper's Figure 3 grid, 26.5 d_p in its box), sampled
+# 40-80 t_ref (a coarse grid seeds its clustering from little noise, as the half profile's COARSE_SET), then the
+# table of the slip error against each resolved run (tools/closure_wide_table.py) -> OUT/figure3_c<CELLS>/table.md.
+# A coarse run whose summary.h5 exists is not run again; a filtered file or table that exists is kept.
+# Environment: PROFILE (default paper), CELLS (default 4), BUILD (default build), NICE (default 0), NP (default 1:
+# ranks of each coarse run).
+# Exit status: 0 done (a coarse run that fails is reported and left out of the table); 2 bad arguments.
+set -euo pipefail
+repo=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
+out=${1:?usage: figure3_box.sh OUT [PHIS] [ALPHAS] [SEEDS] [CLOSURES]}
+IFS=, read -r -a phis <<< "${2:-0.02}"
+IFS=, read -r -a alphas <<< "${3:-2,3,4,6,8}"
+IFS=, read -r -a seeds <<< "${4:-1,2,3}"
+IFS=, read -r -a closures <<< "${5:-micro,radl,halfbox,perfect,model}"
+profile=${PROFILE:-paper}
+cells=${CELLS:-4}
+build=${BUILD:-$repo/build}
+nice_level=${NICE:-0}
+np=${NP:-1}
+[[ $cells =~ ^[1-9][0-9]*$ ]] || { echo "figure3_box.sh: CELLS=$cells is not a positive integer" >&2; exit 2; }
+[[ $np =~ ^[1-9][0-9]*$ ]] || { echo "figure3_box.sh: NP=$np is not a positive integer" >&2; exit 2; }
+mpirun=()
+[ "$np" -gt 1 ] && mpirun=(mpirun --allow-run-as-root --oversubscribe -np "$np")
+mk() { make -s -f "$repo/Makefile.pipeline" PROFILE="$profile" "$@"; }
+base_scene=$(cd "$repo" && mk print-BASE_SCENE)
+box_dp=$(cd "$repo" && mk print-BOX_DP)
+from_tref=$(cd "$repo" && mk print-FROM_TREF)
+read -r -a filter_args <<< "$(cd "$repo" && mk print-FILTER_ARGS_LINE)"
+dx=$(python3 -c "print($box_dp/$cells)")
+dir=$out/figure3_c$cells
+mkdir -p "$dir"
+say() { echo "[figure3] $*" >&2; }
+for phi in "${phis[@]}"; do
+  [ -f "$out/generate/phi$phi/DONE" ] || { echo "figure3_box.sh: $out/generate/phi$phi is not a finished run" >&2; exit 2; }
+done
+for c in "${closures[@]}"; do
+  case $c in micro | radl | halfbox | perfect | model) ;;
+    *) echo "figure3_box.sh: closure $c is not one of micro, radl, halfbox, perfect, model" >&2; exit 2 ;;
+  esac
+done
+
+# per phi: the resolved reference, and the perfect table from the run's own filtered file (the profile's filter
+# settings with the grid of CELLS across added when the profile's grids lack it)
+for phi in "${phis[@]}"; do
+  ref=$dir/resolved_phi$phi.h5
+  [ -f "$ref" ] || "$build/cgd-coarse" --summarise "$out/generate/phi$phi" --from-tref "$from_tref" --force -o "$ref" > /dev/null
+  [[ " ${closures[*]} " == *" perfect "* ]] || continue
+  filtered=$dir/filtered_phi$phi.h5
+  if [ ! -f "$filtered" ]; then
+    say "filter phi = $phi"
+    nice -n "$nice_level" "${mpirun[@]}" "$build/cgd-filter" "$out/generate/phi$phi" "${filter_args[@]}" --force --quiet \
+      -o "$filtered"
+  fi
+  table=$dir/perfect_phi$phi.h5
+  [ -f "$table" ] || "$build/cgd-fit" "$filtered" --grid-table "$cells" --force -o "$table" > "${table%.h5}.report.txt" 2>&1 ||
+    { cat "${table%.h5}.report.txt" >&2; exit 1; }
+done
+
+coarse() {  # name phi alpha seed, extra args...
+  local name=$1 phi=$2 alpha=$3 seed=$4
+  shift 4
+  local run=$dir/$name
+  [ -f "$run/summary.h5" ] && return 0
+  rm -rf "$run"
+  say "$name"
+  nice -n "$nice_level" "${mpirun[@]}" "$build/cgd-coarse" "$repo/$base_scene" --quiet \
+    --set run.end_time_tref=80 --set run.sampling_start_tref=40 \
+    --set particles.solids_fraction="$phi" --set particles.seed="$seed" --set fluid.dx_over_dp="$dx" \
+    --set particles.parcel_size="$alpha" "$@" -o "$run" > "$run.log" 2>&1 ||
+    { say "$name failed (log $run.log)"; return 0; }
+}
+for phi in "${phis[@]}"; do
+  for alpha in "${alphas[@]}"; do
+    for seed in "${seeds[@]}"; do
+      for c in "${closures[@]}"; do
+        case $c in
+          micro) args=() ;;
+          radl) args=(--set fluid.drag=radl2014) ;;
+          halfbox) args=(--model "$repo/data/models/half_box.h5") ;;
+          perfect) args=(--model "$dir/perfect_phi$phi.h5" --set fluid.parcel_correction=false) ;;
+          model)
+            [ -f "$out/fit/model.h5" ] || { say "no $out/fit/model.h5: the model runs are left out"; continue; }
+            args=(--model "$out/fit/model.h5") ;;
+        esac
+        coarse "phi${phi}_a${alpha}_${c}_s$seed" "$phi" "$alpha" "$seed" "${args[@]}"
+      done
+    done
+  done
+done
+/usr/bin/python3 "$repo/tools/closure_wide_table.py" "$dir" | tee "$dir/table.md"
