@@ -2,17 +2,20 @@
 """The filtered statistics shipped in data/filtered/ (README "Shipped data") carry what a refit needs, and cgd-fit
 refits from them what the runs measured.
 
-For every shipped file (one resolved run each, cgd-filter as `PROFILE=half` runs it):
+Files are grouped by box, the name's prefix: half_* (cgd-filter as `PROFILE=half` runs it, grids 12, 8, 6, 5, 4, 3)
+and paper_* (`PROFILE=paper`, grids 16, 12, 8, 6, 5, 4); two boxes are never pooled. For every shipped file (one
+resolved run each):
   * it is a filtered file of one run whose scene (the `scene` attribute) names the seed and gamma*, and it has the
-    box widths and the coarse grids 12, 8, 6, 5, 4, 3 (what `--operator grid` fits);
+    box widths and its profile's coarse grids (what `--operator grid` fits);
   * in every width and grid group the stored per-bin H, count and mean phi equal what this script recomputes from
     the per-snapshot sums (H = 1 - sum N / sum beta_micro u_slip), to 1e-12 relative: the sums are what cgd-fit
     pools and bootstraps, so a file whose totals disagree with them would refit to something else;
-Then, pooled:
+Then, pooled per box:
   * `cgd-fit --grid-table 4` on the shipped files writes the 4-cell grid's measured H_grid as a table; it must
     equal the pooled H of the per-snapshot sums, recomputed here, in every bin with at least 100 samples (the
     table's --min-count), to 1e-12 (both are the same sums in another order: round-off only);
-  * `cgd-fit --operator grid --width-exponent fit` (the half profile's fit) runs on them and fits every grid.
+  * cgd-fit with the profile's FIT_ARGS (half: `--operator grid --width-exponent fit`; paper: `--operator grid`)
+    runs on them and fits every grid.
 
 Environment (set by CTest): CGD_SOURCE_DIR, CGD_BINARY_DIR.
 """
@@ -25,7 +28,10 @@ import tempfile
 import h5py
 import numpy as np
 
-GRIDS = (12, 8, 6, 5, 4, 3)
+# per box (the file name's prefix): the coarse grids its profile's cgd-filter writes (Makefile.pipeline FILTER_GRIDS)
+# and its profile's cgd-fit options (FIT_ARGS); files of one box are pooled, never two boxes together
+PROFILES = {"half": dict(grids=(12, 8, 6, 5, 4, 3), fit_args=("--operator", "grid", "--width-exponent", "fit")),
+            "paper": dict(grids=(16, 12, 8, 6, 5, 4), fit_args=("--operator", "grid"))}
 MIN_COUNT = 100  # cgd-fit's default --min-count, which --grid-table applies
 
 
@@ -59,12 +65,9 @@ def check_group(path, f, name):
     return count, num, mic, phi
 
 
-def main():
-    src = os.environ.get("CGD_SOURCE_DIR", os.path.join(os.path.dirname(__file__), "..", ".."))
-    build = os.environ.get("CGD_BINARY_DIR", os.path.join(src, "build"))
-    files = sorted(glob.glob(os.path.join(src, "data", "filtered", "*.h5")))
-    if not files:
-        fail("no data/filtered/*.h5")
+def check_box(profile, files, build):
+    """The checks of the files of one box; returns a line of what was checked."""
+    grids = PROFILES[profile]["grids"]
     pooled = None
     for path in files:
         with h5py.File(path, "r") as f:
@@ -76,7 +79,7 @@ def main():
             for key in ("seed =", "gamma_star ="):
                 if key not in scene:
                     fail(f"{path}: the scene does not name {key.split()[0]}")
-            groups = [k for k in f if k.startswith("width_")] + ["whole_box"] + [f"grids/{n}" for n in GRIDS]
+            groups = [k for k in f if k.startswith("width_")] + ["whole_box"] + [f"grids/{n}" for n in grids]
             for name in groups:
                 if name not in f:
                     fail(f"{path}: no /{name}")
@@ -92,17 +95,34 @@ def main():
         count, num, mic, phi = pooled
         keep = count >= MIN_COUNT
         if not (close(n_t, count[keep]) and close(phi_t, phi[keep] / count[keep]) and close(H_t, 1 - num[keep] / mic[keep])):
-            fail("cgd-fit --grid-table 4 does not reproduce the pooled H_grid of the shipped per-snapshot sums")
+            fail(f"{profile}: cgd-fit --grid-table 4 does not reproduce the pooled H_grid of the shipped per-snapshot sums")
 
         model = os.path.join(tmp, "model.h5")
-        subprocess.run([os.path.join(build, "cgd-fit"), *files, "--operator", "grid", "--width-exponent", "fit",
-                        "--bootstrap", "0", "--quiet", "-o", model], check=True)
+        subprocess.run([os.path.join(build, "cgd-fit"), *files, *PROFILES[profile]["fit_args"], "--bootstrap", "0",
+                        "--quiet", "-o", model], check=True)
         with h5py.File(model, "r") as m:
             cells = sorted(int(c) for c in m.attrs["calibrated_cells_across"])
-        if cells != sorted(GRIDS):
-            fail(f"the refit calibrated grids {cells}, not {sorted(GRIDS)}")
+        if cells != sorted(grids):
+            fail(f"{profile}: the refit calibrated grids {cells}, not {sorted(grids)}")
+    return (f"{profile}: {len(files)} files; --grid-table 4 reproduces the pooled H_grid in {int(keep.sum())} bins; "
+            f"the refit fits grids {cells}")
+
+
+def main():
+    src = os.environ.get("CGD_SOURCE_DIR", os.path.join(os.path.dirname(__file__), "..", ".."))
+    build = os.environ.get("CGD_BINARY_DIR", os.path.join(src, "build"))
+    files = sorted(glob.glob(os.path.join(src, "data", "filtered", "*.h5")))
+    if not files:
+        fail("no data/filtered/*.h5")
+    boxes = {}
+    for path in files:
+        profile = os.path.basename(path).split("_")[0]
+        if profile not in PROFILES:
+            fail(f"{path}: the name does not start with one of {', '.join(p + '_' for p in PROFILES)} (the box's profile)")
+        boxes.setdefault(profile, []).append(path)
+    lines = [check_box(profile, box_files, build) for profile, box_files in sorted(boxes.items())]
     print(f"check_filtered: {len(files)} shipped files; per-bin H = the per-snapshot sums' in every group; "
-          f"--grid-table 4 reproduces the pooled H_grid in {int(keep.sum())} bins; the refit fits grids {cells}: OK")
+          + "; ".join(lines) + ": OK")
 
 
 if __name__ == "__main__":
