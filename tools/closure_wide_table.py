@@ -1,7 +1,9 @@
 #!/usr/bin/python3
 """The closure experiments' table (scripts/closure_wide_filter.sh, scripts/closure_drift.sh; docs/closure.md).
 
-usage: tools/closure_wide_table.py DIR
+usage: tools/closure_wide_table.py DIR [--plot PNG]
+  --plot PNG: also the picture (the paper's Figure 3 as errors): per phi a panel, the error of the slip against alpha
+  per closure (mean over the seeds +- its standard error), the resolved run's own +- standard error shaded.
 
 DIR holds resolved_phi<phi>.h5 (cgd-coarse --summarise of each resolved run over its sampling window) and the coarse
 runs phi<phi>_a<alpha>_<closure>_s<seed>/summary.h5, <closure> = g<G> (the perfect table of the grid of G cells
@@ -54,15 +56,45 @@ def closure_order(c):
     return (3, 0, 0.0)
 
 
+def plot(path, refs, ref_err, table):
+    """table: {(phi, closure, alpha): (mean, se, n)} -> PNG at path."""
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    phis = sorted({k[0] for k in table}, key=float)
+    fig, axes = plt.subplots(1, len(phis), figsize=(5.2 * len(phis), 4.0), squeeze=False)
+    for ax, phi in zip(axes[0], phis):
+        band = 100 * ref_err[phi] / refs[phi]
+        ax.axhspan(-band, band, color="0.85", lw=0, label="resolved ± its standard error")
+        ax.axhline(0, color="0.4", lw=0.8)
+        for c in sorted({k[1] for k in table if k[0] == phi}, key=closure_order):
+            alphas = sorted(a for (p, cc, a) in table if p == phi and cc == c)
+            m = [100 * table[(phi, c, a)][0] for a in alphas]
+            e = [100 * table[(phi, c, a)][1] for a in alphas]
+            ax.errorbar(alphas, m, yerr=e, marker="o", ms=4, capsize=3, label=closure_label(c))
+        ax.set_xlabel("parcel size α")
+        ax.set_ylabel("error of the slip, %")
+        ax.set_title(f"⟨φ⟩ = {phi}, resolved slip {refs[phi]:.3f} u_t")
+        ax.legend(fontsize=7)
+    fig.tight_layout()
+    fig.savefig(path, dpi=120)
+
+
 def main(argv):
+    plot_path = None
+    if len(argv) == 4 and argv[2] == "--plot":
+        plot_path = argv[3]
+        argv = argv[:2]
     if len(argv) != 2:
         print(__doc__, file=sys.stderr)
         return 2
     d = argv[1]
+    ref_err = {}
     refs = {}
     for p in glob.glob(os.path.join(d, "resolved_phi*.h5")):
         phi = os.path.basename(p)[len("resolved_phi"):-3]
         refs[phi] = attr(p, "slip_over_ut")
+        ref_err[phi] = attr(p, "slip_stderr")
     runs = {}
     for s in glob.glob(os.path.join(d, "*", "summary.h5")):
         m = NAME.match(os.path.basename(os.path.dirname(s)))
@@ -77,12 +109,14 @@ def main(argv):
     print("| ⟨φ⟩ | resolved slip/u_t | closure | α | error of the slip | seeds |")
     print("|---|---|---|---|---|---|")
     per_closure = {}
+    table = {}
     for (phi, c, alpha) in sorted(runs, key=lambda k: (float(k[0]), closure_order(k[1]), k[2])):
         e = [x[0] for x in runs[(phi, c, alpha)]]
         n = len(e)
         mean = sum(e) / n
         se = (math.sqrt(sum((x - mean) ** 2 for x in e) / (n - 1)) / math.sqrt(n)) if n > 1 else runs[(phi, c, alpha)][0][1]
         per_closure.setdefault(c, []).append(mean)
+        table[(phi, c, alpha)] = (mean, se, n)
         print(f"| {phi} | {refs[phi]:.3f} | {closure_label(c)} | {alpha} | {100 * mean:+.1f} ± {100 * se:.1f} % | {n} |")
     print()
     print("| closure | rms of the means | worst | configurations |")
@@ -92,6 +126,8 @@ def main(argv):
         rms = math.sqrt(sum(x * x for x in m) / len(m))
         worst = max(m, key=abs)
         print(f"| {closure_label(c)} | {100 * rms:.1f} % | {100 * worst:+.1f} % | {len(m)} |")
+    if plot_path:
+        plot(plot_path, refs, ref_err, table)
     return 0
 
 

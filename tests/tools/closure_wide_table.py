@@ -55,5 +55,8 @@ with tempfile.TemporaryDirectory() as d:
     check(out.index("drift table, held out") < out.index("perfect table of the 4-cell grid"),
           "named closures are listed first")
     check("0.10" not in out, "a phi without a reference is left out")
+    png = os.path.join(d, "figure.png")
+    p = subprocess.run([sys.executable, tool, d, "--plot", png], capture_output=True, text=True)
+    check(p.returncode == 0 and os.path.getsize(png) > 0, f"--plot writes the picture ({p.stderr.strip()})")
 print(f"{failures} failed" if failures else "all passed")
 sys.exit(1 if failures else 0)
