@@ -16,6 +16,7 @@ usage: /usr/bin/python3 tools/compare_boxes.py A.h5 B.h5 [--labels A,B] [--min-c
 Exit status 0; 2 for a file that is not a filtered file with grids, or no pair of grids of equal cells.
 (Debian's h5py/numpy/matplotlib belong to /usr/bin/python3.)"""
 import argparse
+import collections
 import math
 import os
 import sys
@@ -32,8 +33,11 @@ def fail(msg):
     sys.exit(2)
 
 
+Summary = collections.namedtuple("Summary", "bins mean_diff chi2_dof")  # of the common bins of a pair
+
+
 def read_grids(path):
-    """{cells across: dict(dx_over_dp, F, phi, H, lo, hi, se, count)} of a filtered file."""
+    """{cells across: {dx_over_dp, F, phi_mean, H, H_low, H_high, H_stderr, count}} of a filtered file (its names)."""
     try:
         f = h5py.File(path, "r")
     except OSError as e:
@@ -49,9 +53,8 @@ def read_grids(path):
             for key in ("H", "H_low", "H_high", "H_stderr", "count", "phi_mean"):
                 if key not in g:
                     fail(f"{path}: /grids/{name}/{key} missing")
-            out[int(name)] = dict(dx_over_dp=float(g.attrs["dx_over_dp"]), F=float(g.attrs["F"]),
-                                  phi=g["phi_mean"][:], H=g["H"][:], lo=g["H_low"][:], hi=g["H_high"][:],
-                                  se=g["H_stderr"][:], count=g["count"][:])
+            out[int(name)] = {"dx_over_dp": float(g.attrs["dx_over_dp"]), "F": float(g.attrs["F"]),
+                              **{key: g[key][:] for key in ("H", "H_low", "H_high", "H_stderr", "count", "phi_mean")}}
         return out
 
 
@@ -75,10 +78,10 @@ def compare(ga, gb, min_count):
         if not (np.isfinite(ga["H"][i]) and np.isfinite(gb["H"][i])):
             continue
         diff = gb["H"][i] - ga["H"][i]
-        se = math.hypot(ga["se"][i], gb["se"][i])
-        phi = 0.5 * (ga["phi"][i] + gb["phi"][i])
-        rows.append(dict(phi=phi, a=ga["H"][i], a_lo=ga["lo"][i], a_hi=ga["hi"][i], b=gb["H"][i], b_lo=gb["lo"][i],
-                         b_hi=gb["hi"][i], diff=diff, z=diff / se if se > 0 else math.nan,
+        se = math.hypot(ga["H_stderr"][i], gb["H_stderr"][i])
+        phi = 0.5 * (ga["phi_mean"][i] + gb["phi_mean"][i])
+        rows.append(dict(phi=phi, a=ga["H"][i], a_lo=ga["H_low"][i], a_hi=ga["H_high"][i], b=gb["H"][i], b_lo=gb["H_low"][i],
+                         b_hi=gb["H_high"][i], diff=diff, z=diff / se if se > 0 else math.nan,
                          ca=int(ga["count"][i]), cb=int(gb["count"][i]),
                          radl=float(radl2014(phi, ga["F"])[0])))
     if not rows:
@@ -87,9 +90,7 @@ def compare(ga, gb, min_count):
     d = np.array([r["diff"] for r in rows])
     z = np.array([r["z"] for r in rows])
     z = z[np.isfinite(z)]
-    summary = dict(bins=len(rows), mean_diff=float(np.sum(w * d) / np.sum(w)),
-                   chi2_dof=float(np.mean(z ** 2)) if len(z) else math.nan)
-    return rows, summary
+    return rows, Summary(len(rows), float(np.sum(w * d) / np.sum(w)), float(np.mean(z ** 2)) if len(z) else math.nan)
 
 
 def tables(a, b, labels, pairs, min_count):
@@ -114,8 +115,7 @@ def tables(a, b, labels, pairs, min_count):
         if s is None:
             out.append(f"| {ga['dx_over_dp']:.2f} | {na} / {nb} | 0 | – | – |")
         else:
-            out.append(f"| {ga['dx_over_dp']:.2f} | {na} / {nb} | {s['bins']} | {s['mean_diff']:+.3f} | "
-                       f"{s['chi2_dof']:.2f} |")
+            out.append(f"| {ga['dx_over_dp']:.2f} | {na} / {nb} | {s.bins} | {s.mean_diff:+.3f} | {s.chi2_dof:.2f} |")
     return "\n".join(out)
 
 
@@ -131,9 +131,9 @@ def plot(a, b, labels, pairs, min_count, path):
     for ax, (na, nb) in zip(axes.flat, pairs):
         for g, label, colour in ((a[na], labels[0], "C0"), (b[nb], labels[1], "C1")):
             keep = (g["count"] >= min_count) & np.isfinite(g["H"])
-            ax.fill_between(g["phi"][keep], g["lo"][keep], g["hi"][keep], color=colour, alpha=0.25, lw=0)
-            ax.plot(g["phi"][keep], g["H"][keep], "o-", ms=2.5, color=colour, label=label)
-        top = max(float(np.nanmax(g["phi"][g["count"] >= min_count], initial=0.0)) for g in (a[na], b[nb]))
+            ax.fill_between(g["phi_mean"][keep], g["H_low"][keep], g["H_high"][keep], color=colour, alpha=0.25, lw=0)
+            ax.plot(g["phi_mean"][keep], g["H"][keep], "o-", ms=2.5, color=colour, label=label)
+        top = max(float(np.nanmax(g["phi_mean"][g["count"] >= min_count], initial=0.0)) for g in (a[na], b[nb]))
         phi = np.linspace(0.005, max(0.05, top), 100)
         ax.plot(phi, radl2014(phi, a[na]["F"]), "k--", lw=1, label="Radl 2014")
         ax.set_title(f"{a[na]['dx_over_dp']:.1f} $d_p$ cells")

@@ -54,8 +54,8 @@ with tempfile.TemporaryDirectory() as tmp:
     check(len(rows) == 2, f"two common bins with >= 100 samples ({len(rows)})")
     check(abs(rows[0]["diff"] - 0.04) < 1e-12 and abs(rows[0]["z"] - 0.8) < 1e-12 and
           abs(rows[1]["z"] + 0.03 / np.sqrt(5e-4)) < 1e-12, f"differences and z ({rows})")
-    check(abs(s["mean_diff"] - (1000 * 0.04 - 300 * 0.03) / 1300) < 1e-12 and
-          abs(s["chi2_dof"] - (0.8 ** 2 + 0.03 ** 2 / 5e-4) / 2) < 1e-12,
+    check(abs(s.mean_diff - (1000 * 0.04 - 300 * 0.03) / 1300) < 1e-12 and
+          abs(s.chi2_dof - (0.8 ** 2 + 0.03 ** 2 / 5e-4) / 2) < 1e-12,
           f"mean difference 0.023846, chi2/dof 1.22 ({s})")
     out = subprocess.run([sys.executable, tool, a, b, "--min-count", "100", "-o", os.path.join(tmp, "cmp")],
                          capture_output=True, text=True)
