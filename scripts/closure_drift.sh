@@ -98,20 +98,10 @@ for phi in "${phis[@]}"; do
   [ -f "$ref" ] || "$build/cgd-coarse" --summarise "$out/generate/phi$phi" --from-tref $from_tref --force -o "$ref" > /dev/null
 done
 
-coarse() {  # name phi alpha seed, extra args...
-  local name=$1 phi=$2 alpha=$3 seed=$4
-  shift 4
-  local run=$runs_dir/$name
-  [ -f "$run/summary.h5" ] && return 0
-  rm -rf "$run"
-  say "$name"
-  local sets=()
-  for s in "${coarse_set[@]}"; do sets+=(--set "$s"); done
-  nice -n "$nice_level" "$build/cgd-coarse" "$repo/$base_scene" --quiet "${sets[@]}" \
-    --set particles.solids_fraction="$phi" --set particles.seed="$seed" --set fluid.dx_over_dp="$dx" \
-    --set particles.parcel_size="$alpha" --set fluid.drag_own_deposit="$own_deposit" "$@" -o "$run" > "$run.log" 2>&1 ||
-    { say "$name failed (log $run.log)"; return 0; }
-}
+source "$repo/scripts/coarse_run.sh"
+launcher=()
+coarse_sets=()
+for s in "${coarse_set[@]}"; do coarse_sets+=(--set "$s"); done
 for phi in "${phis[@]}"; do
   for alpha in "${alphas[@]}"; do
     for seed in "${seeds[@]}"; do
@@ -123,7 +113,8 @@ for phi in "${phis[@]}"; do
           radl) args=(--set fluid.drag=radl2014) ;;  # with the paper's c_corr(alpha), as the pipeline runs it
           *) echo "closure_drift.sh: closure $c is not one of driftheld, driftown, tableheld, tableown, radl" >&2; exit 2 ;;
         esac
-        coarse "phi${phi}_a${alpha}_${c}_s$seed" "$phi" "$alpha" "$seed" "${args[@]}"
+        coarse_run "$runs_dir/phi${phi}_a${alpha}_${c}_s$seed" "$phi" "$alpha" "$seed" \
+          --set fluid.drag_own_deposit="$own_deposit" "${args[@]}"
       done
     done
   done

@@ -33,8 +33,8 @@ nice_level=${NICE:-0}
 np=${NP:-1}
 [[ $cells =~ ^[1-9][0-9]*$ ]] || { echo "figure3_box.sh: CELLS=$cells is not a positive integer" >&2; exit 2; }
 [[ $np =~ ^[1-9][0-9]*$ ]] || { echo "figure3_box.sh: NP=$np is not a positive integer" >&2; exit 2; }
-mpirun=()
-[ "$np" -gt 1 ] && mpirun=(mpirun --allow-run-as-root --oversubscribe -np "$np")
+launcher=()
+[ "$np" -gt 1 ] && launcher=(mpirun --allow-run-as-root --oversubscribe -np "$np")
 mk() { make -s -f "$repo/Makefile.pipeline" PROFILE="$profile" "$@"; }
 base_scene=$(cd "$repo" && mk print-BASE_SCENE)
 box_dp=$(cd "$repo" && mk print-BOX_DP)
@@ -62,7 +62,7 @@ for phi in "${phis[@]}"; do
   filtered=$dir/filtered_phi$phi.h5
   if [ ! -f "$filtered" ]; then
     say "filter phi = $phi"
-    nice -n "$nice_level" "${mpirun[@]}" "$build/cgd-filter" "$out/generate/phi$phi" "${filter_args[@]}" --force --quiet \
+    nice -n "$nice_level" "${launcher[@]}" "$build/cgd-filter" "$out/generate/phi$phi" "${filter_args[@]}" --force --quiet \
       -o "$filtered"
   fi
   table=$dir/perfect_phi$phi.h5
@@ -70,19 +70,8 @@ for phi in "${phis[@]}"; do
     { cat "${table%.h5}.report.txt" >&2; exit 1; }
 done
 
-coarse() {  # name phi alpha seed, extra args...
-  local name=$1 phi=$2 alpha=$3 seed=$4
-  shift 4
-  local run=$dir/$name
-  [ -f "$run/summary.h5" ] && return 0
-  rm -rf "$run"
-  say "$name"
-  nice -n "$nice_level" "${mpirun[@]}" "$build/cgd-coarse" "$repo/$base_scene" --quiet \
-    --set run.end_time_tref=80 --set run.sampling_start_tref=40 \
-    --set particles.solids_fraction="$phi" --set particles.seed="$seed" --set fluid.dx_over_dp="$dx" \
-    --set particles.parcel_size="$alpha" "$@" -o "$run" > "$run.log" 2>&1 ||
-    { say "$name failed (log $run.log)"; return 0; }
-}
+source "$repo/scripts/coarse_run.sh"
+coarse_sets=(--set run.end_time_tref=80 --set run.sampling_start_tref=40)
 for phi in "${phis[@]}"; do
   for alpha in "${alphas[@]}"; do
     for seed in "${seeds[@]}"; do
@@ -96,7 +85,7 @@ for phi in "${phis[@]}"; do
             [ -f "$out/fit/model.h5" ] || { say "no $out/fit/model.h5: the model runs are left out"; continue; }
             args=(--model "$out/fit/model.h5") ;;
         esac
-        coarse "phi${phi}_a${alpha}_${c}_s$seed" "$phi" "$alpha" "$seed" "${args[@]}"
+        coarse_run "$dir/phi${phi}_a${alpha}_${c}_s$seed" "$phi" "$alpha" "$seed" "${args[@]}"
       done
     done
   done

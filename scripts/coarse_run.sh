@@ -1,0 +1,17 @@
+# Sourced by the closure experiments' scripts (closure_drift.sh, figure3_box.sh): one coarse run of their matrix.
+# coarse_run RUN PHI ALPHA SEED [cgd-coarse options...]: cgd-coarse of $repo/$base_scene with the caller's array
+# $coarse_sets (its --set options, given first), then that solids fraction, seed and parcel size on cells of $dx d_p,
+# then the options; niceness $nice_level, through the launcher array $launcher (empty: one rank) -> RUN (log RUN.log).
+# A run whose summary.h5 exists is kept; a failed run is reported through the caller's say() and left out (status 0),
+# so that one failure does not stop the matrix.
+coarse_run() {
+  local run=$1 phi=$2 alpha=$3 seed=$4
+  shift 4
+  [ -f "$run/summary.h5" ] && return 0
+  rm -rf "$run"
+  say "$(basename "$run")"
+  nice -n "$nice_level" "${launcher[@]}" "$build/cgd-coarse" "$repo/$base_scene" --quiet "${coarse_sets[@]}" \
+    --set particles.solids_fraction="$phi" --set particles.seed="$seed" --set fluid.dx_over_dp="$dx" \
+    --set particles.parcel_size="$alpha" "$@" -o "$run" > "$run.log" 2>&1 ||
+    { say "$(basename "$run") failed (log $run.log)"; return 0; }
+}
