@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # The developed states the engine benchmarks time (issue 25), made reproducibly: the PROFILE=half resolved
-# run (Makefile.pipeline's GENERATE_SET: 53 x 213 x 53 d_p, gamma* = 2e-3) at each solids fraction, run from
+# run (Makefile.pipeline's GENERATE_SET: 53 x 213 x 53 d_p, gamma* = 2e-3, and its PHI_SET_<phi>: gamma* = 1e-3 at
+# 0.20-0.40) at each solids fraction, run from
 # rest to T t_ref with cgd-generate (continued from its checkpoint when OUT/phi<phi> already has one), so that
 #   build/bench/cgd-bench-developed --from-run OUT/phi<phi>
 # times that state. A pipeline run directory (out/generate/phi<phi> of `make -f Makefile.pipeline PROFILE=half
@@ -37,8 +38,12 @@ for phi in "${phis[@]}"; do
   if [ -e "$dir/checkpoint.h5" ]; then
     args=(--restart "${args[@]}")
   else
+    # the profile's settings for this <phi> too (PHI_SET_<phi>, e.g. the dense runs' gamma*), after GENERATE_SET
+    # as the pipeline gives them
+    read -r -a phi_set <<< "$(make -s -C "$repo" -f Makefile.pipeline PROFILE=half "print-PHI_SET_$phi")" ||
+      { echo "developed_states.sh: could not read PHI_SET_$phi from Makefile.pipeline" >&2; exit 2; }
     sets=()
-    for kv in "${profile_set[@]}"; do sets+=(--set "$kv"); done
+    for kv in "${profile_set[@]}" "${phi_set[@]}"; do sets+=(--set "$kv"); done
     args=("$repo/$base" --set "particles.solids_fraction=$phi" "${sets[@]}" "${args[@]}")
   fi
   echo "developed_states.sh: phi = $phi to $tref t_ref -> $dir"
