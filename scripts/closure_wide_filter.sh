@@ -88,20 +88,12 @@ for phi in "${phis[@]}"; do
   [ -f "$ref" ] || "$build/cgd-coarse" --summarise "$out/generate/phi$phi" --from-tref $from_tref --force -o "$ref" > /dev/null
 done
 
-coarse() {  # name, extra args...
-  local name=$1 phi=$2 alpha=$3 seed=$4
-  shift 4
-  local run=$dir/$name
-  [ -f "$run/summary.h5" ] && return 0
-  rm -rf "$run"
-  echo "[closure_wide] $name" >&2
-  local sets=()
-  for s in "${coarse_set[@]}"; do sets+=(--set "$s"); done
-  nice -n "$nice_level" "$build/cgd-coarse" "$repo/$base_scene" --quiet "${sets[@]}" \
-    --set particles.solids_fraction="$phi" --set particles.seed="$seed" --set fluid.dx_over_dp="$dx" \
-    --set particles.parcel_size="$alpha" "$@" -o "$run" > "$run.log" 2>&1 ||
-    { echo "[closure_wide] $name failed (log $run.log)" >&2; return 0; }
-}
+say() { echo "[closure_wide] $*" >&2; }
+source "$repo/scripts/coarse_run.sh"
+launcher=()
+coarse_sets=()
+for s in "${coarse_set[@]}"; do coarse_sets+=(--set "$s"); done
+coarse() { local name=$1; shift; coarse_run "$dir/$name" "$@"; }  # name phi alpha seed [options...]
 for phi in "${phis[@]}"; do
   for alpha in "${alphas[@]}"; do
     for seed in "${seeds[@]}"; do

@@ -1,4 +1,4 @@
-# Sourced by the closure experiments' scripts (closure_drift.sh, figure3_box.sh): one coarse run of their matrix.
+# Sourced by the closure experiments' scripts (closure_drift.sh, closure_wide_filter.sh, figure3_box.sh): one coarse run of their matrix.
 # coarse_run RUN PHI ALPHA SEED [cgd-coarse options...]: cgd-coarse of $repo/$base_scene with the caller's array
 # $coarse_sets (its --set options, given first), then that solids fraction, seed and parcel size on cells of $dx d_p,
 # then the options; niceness $nice_level, through the launcher array $launcher (empty: one rank) -> RUN (log RUN.log).
