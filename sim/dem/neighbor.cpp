@@ -2,8 +2,14 @@
 
 #include <algorithm>
 #include <array>
+#include <bit>
 #include <cmath>
+#include <cstdint>
 #include <limits>
+
+#if defined(__AVX2__)
+#include <immintrin.h>
+#endif
 
 namespace cgd::dem {
 
@@ -43,6 +49,26 @@ Grid make_grid(const Particles& p, std::size_t count, double cell_size) {
   return g;
 }
 
+#if defined(__AVX2__)
+/// The candidate scan's compress-store (issue 25, fourth round): for each 4-bit mask of hits, the byte shuffle
+/// that moves the hit lanes' 32-bit partner indices to the front, in order (AVX2 has no compress instruction).
+constexpr std::array<std::array<std::uint8_t, 16>, 16> make_compress_table() {
+  std::array<std::array<std::uint8_t, 16>, 16> t{};
+  for (int mask = 0; mask < 16; ++mask) {
+    int out = 0;
+    for (int lane = 0; lane < 4; ++lane)
+      if (mask & (1 << lane)) {
+        for (int b = 0; b < 4; ++b) t[mask][4 * out + b] = static_cast<std::uint8_t>(4 * lane + b);
+        ++out;
+      }
+    for (; out < 4; ++out)
+      for (int b = 0; b < 4; ++b) t[mask][4 * out + b] = 0x80;  // zero the unused lanes
+  }
+  return t;
+}
+alignas(16) constexpr auto kCompress = make_compress_table();
+#endif
+
 }  // namespace
 
 void NeighborList::build(const Particles& p, double cell_size, double contact_distance, const float* half_skin,
@@ -60,18 +86,26 @@ void NeighborList::build(const Particles& p, double cell_size, double contact_di
     ++cell_start_[cell_of_[i] + 1];
   }
   for (std::size_t c = 1; c < ncell; ++c) cell_start_[c + 1] += cell_start_[c];
-  cell_items_.resize(p.n_total);
   // the positions too, in cell order (issue 17, third round): the candidate scan below then reads them as
-  // one stream per row of cells instead of one cache miss per candidate (the scan was 29 % of a developed
-  // Table 1 step, most of it on the candidate's position)
-  cell_x_.resize(3 * p.n_total);
-  cell_h_.resize(p.n_total);
+  // streams per row of cells instead of one cache miss per candidate (the scan was 29 % of a developed
+  // Table 1 step, most of it on the candidate's position). One array per coordinate (issue 25, fourth round),
+  // so that the scan tests four candidates per instruction; each array has kScanPad more slots (zero, never
+  // listed) so that the scan's last group of four may read past the last particle.
+  const std::size_t slots = p.n_total + kScanPad;
+  for (auto* a : {&cell_px_, &cell_py_, &cell_pz_}) a->resize(slots);
+  cell_h_.resize(slots);
+  cell_items_.resize(slots);
+  for (std::size_t k = p.n_total; k < slots; ++k) {
+    cell_px_[k] = cell_py_[k] = cell_pz_[k] = 0.0;
+    cell_h_[k] = 0.0f;
+    cell_items_[k] = -1;
+  }
   for (std::size_t i = p.n_total; i-- > 0;) {
     const std::int32_t k = --cell_start_[cell_of_[i] + 1];
     cell_items_[k] = static_cast<std::int32_t>(i);
-    cell_x_[3 * k] = p.x[3 * i];
-    cell_x_[3 * k + 1] = p.x[3 * i + 1];
-    cell_x_[3 * k + 2] = p.x[3 * i + 2];
+    cell_px_[k] = p.x[3 * i];
+    cell_py_[k] = p.x[3 * i + 1];
+    cell_pz_[k] = p.x[3 * i + 2];
     cell_h_[k] = half_skin[i];
   }
   cell_start_[ncell + 1] = static_cast<std::int32_t>(p.n_total);
@@ -101,20 +135,52 @@ void NeighborList::build(const Particles& p, double cell_size, double contact_di
         candidates += static_cast<std::size_t>(re[rows] - rb[rows]);
         ++rows;
       }
-    if (n + candidates > index.size()) index.resize(std::max(2 * index.size(), n + candidates + 4096));
+    // room for every candidate, and for the last group of four the vector scan stores whole
+    if (n + candidates + kScanPad > index.size()) index.resize(std::max(2 * index.size(), n + candidates + 4096));
     std::int32_t* out = index.data();
     const std::size_t first = n;
     const auto self = static_cast<std::int32_t>(i);
+    const double *px = cell_px_.data(), *py = cell_py_.data(), *pz = cell_pz_.data();
+    const float* ph = cell_h_.data();
+    const std::int32_t* items = cell_items_.data();
+#if defined(__AVX2__)
+    // four candidates at a time, the same operations in the same order as the scalar test below, so the
+    // same pairs are listed bit for bit: r2 = (dx dx + dy dy) + dz dz (no FMA: -ffp-contract=off) against
+    // (reach_i + h_j)^2; the hits' partner indices are compressed to the front and stored as four (the
+    // lanes after the hits are overwritten by the next group or cut by the final resize)
+    const __m256d vx = _mm256_set1_pd(xi_[0]), vy = _mm256_set1_pd(xi_[1]), vz = _mm256_set1_pd(xi_[2]);
+    const __m256d vreach = _mm256_set1_pd(reach_i);
+    const __m128i vself = _mm_set1_epi32(self);
+    for (int r = 0; r < rows; ++r) {
+      for (std::int32_t k = rb[r]; k < re[r]; k += 4) {
+        const __m256d ddx = _mm256_sub_pd(vx, _mm256_loadu_pd(px + k));
+        const __m256d ddy = _mm256_sub_pd(vy, _mm256_loadu_pd(py + k));
+        const __m256d ddz = _mm256_sub_pd(vz, _mm256_loadu_pd(pz + k));
+        const __m256d r2 =
+            _mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(ddx, ddx), _mm256_mul_pd(ddy, ddy)), _mm256_mul_pd(ddz, ddz));
+        const __m256d cut = _mm256_add_pd(vreach, _mm256_cvtps_pd(_mm_loadu_ps(ph + k)));
+        const __m128i j4 = _mm_loadu_si128(reinterpret_cast<const __m128i*>(items + k));
+        unsigned hit = static_cast<unsigned>(_mm256_movemask_pd(_mm256_cmp_pd(r2, _mm256_mul_pd(cut, cut), _CMP_LT_OQ)));
+        hit &= ~static_cast<unsigned>(_mm_movemask_ps(_mm_castsi128_ps(_mm_cmpeq_epi32(j4, vself))));
+        const std::int32_t left = re[r] - k;
+        if (left < 4) hit &= (1u << left) - 1u;
+        const __m128i packed =
+            _mm_shuffle_epi8(j4, _mm_load_si128(reinterpret_cast<const __m128i*>(kCompress[hit].data())));
+        _mm_storeu_si128(reinterpret_cast<__m128i*>(out + n), packed);
+        n += static_cast<std::size_t>(std::popcount(hit));
+      }
+    }
+#else
     for (int r = 0; r < rows; ++r) {
       for (std::int32_t k = rb[r]; k < re[r]; ++k) {
-        const double* xj = &cell_x_[3 * k];
-        const double ddx = xi_[0] - xj[0], ddy = xi_[1] - xj[1], ddz = xi_[2] - xj[2];
-        const double cut = reach_i + static_cast<double>(cell_h_[k]);
-        const std::int32_t j = cell_items_[k];
+        const double ddx = xi_[0] - px[k], ddy = xi_[1] - py[k], ddz = xi_[2] - pz[k];
+        const double cut = reach_i + static_cast<double>(ph[k]);
+        const std::int32_t j = items[k];
         out[n] = j;
         n += static_cast<std::size_t>((ddx * ddx + ddy * ddy + ddz * ddz < cut * cut) & (j != self));
       }
     }
+#endif
     // canonical order: by partner id (see header); lists are short, insertion sort
     for (std::size_t a = first + 1; a < n; ++a) {
       const std::int32_t j = out[a];
@@ -176,7 +242,8 @@ std::size_t NeighborList::bytes() const {
   return offset.capacity() * sizeof(std::int64_t) + index.capacity() * sizeof(std::int32_t) +
          xi.capacity() * sizeof(double) +
          (cell_start_.capacity() + cell_items_.capacity() + cell_of_.capacity()) * sizeof(std::int32_t) +
-         cell_x_.capacity() * sizeof(double) + cell_h_.capacity() * sizeof(float);
+         (cell_px_.capacity() + cell_py_.capacity() + cell_pz_.capacity()) * sizeof(double) +
+         cell_h_.capacity() * sizeof(float);
 }
 
 std::vector<std::int32_t> spatial_order(const Particles& p, double cell_size) {

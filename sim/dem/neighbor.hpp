@@ -53,8 +53,10 @@ class NeighborList {
 
  private:
   std::vector<std::int32_t> cell_start_, cell_items_, cell_of_;
-  std::vector<double> cell_x_;  // positions in cell order (cell_items_'s), 3 per particle, rebuilt each build
-  std::vector<float> cell_h_;   // half-skins in cell order
+  // positions and half-skins in cell order (cell_items_'s), rebuilt each build, kScanPad slots more
+  static constexpr std::size_t kScanPad = 4;
+  std::vector<double> cell_px_, cell_py_, cell_pz_;
+  std::vector<float> cell_h_;
 };
 
 /// Permutation that orders the owned particles by the cell they lie in (memory locality).

@@ -11,10 +11,12 @@
 #include <cstdint>
 #include <memory>
 #include <numbers>
+#include <random>
 #include <utility>
 #include <vector>
 
 #include "dem_test_util.hpp"
+#include "sim/dem/neighbor.hpp"
 #include "sim/dem/placement.hpp"
 
 namespace {
@@ -89,6 +91,57 @@ void check_no_touching_pair_is_missed(const Case& k) {
   // the test must see what it is about: contacts, and lists rebuilt many times over
   EXPECT_GT(contacts, 0.0);
   EXPECT_GT(sys->rebuilds(), 10);
+}
+
+// NeighborList::build against the definition, pair by pair: particle i lists exactly the j != i (owned or
+// ghost) with |x_i - x_j| < d + h_i + h_j, in increasing id, for every owned i. Clustered positions (cells
+// holding from none to many particles, so that the candidate scan's groups of four end at every offset within
+// a row, issue 25 fourth round), ghosts, random half-skins and ids in shuffled order. The same arithmetic as
+// the build's ((dx dx + dy dy) + dz dz against (d + h_i + h_j)^2 in double, the half-skins as floats), so the
+// comparison is exact.
+TEST(DemNeighbor, BuildListsExactlyThePairsWithinTheirReachInIdOrder) {
+  const double d = 1.0, cell = 1.6;
+  std::mt19937_64 rng(7);
+  std::uniform_real_distribution<double> u01(0.0, 1.0);
+  cgd::dem::Particles p;
+  const std::size_t owned = 1500, total = 1800;  // the last 300 stand for ghosts
+  p.resize(owned, total);
+  for (std::size_t i = 0; i < total; ++i) {
+    // half in a few tight clusters, half spread over a 12 d cube
+    const bool clustered = i % 2 == 0;
+    const double c0 = 3.0 * static_cast<double>(i % 5);
+    for (int c = 0; c < 3; ++c)
+      p.x[3 * i + c] = clustered ? c0 + 1.5 * u01(rng) : 12.0 * u01(rng);
+  }
+  std::vector<std::int64_t> ids(total);
+  for (std::size_t i = 0; i < total; ++i) ids[i] = static_cast<std::int64_t>(i);
+  std::shuffle(ids.begin(), ids.end(), rng);
+  for (std::size_t i = 0; i < total; ++i) p.id[i] = ids[i];
+  std::vector<float> h(total);
+  for (auto& hi : h) hi = static_cast<float>(0.3 * (cell - d) * u01(rng));  // each at most (cell - d) / 2
+  cgd::dem::NeighborList list;
+  list.build(p, cell, d, h.data(), false);
+  std::size_t entries = 0, max_row = 0;
+  for (std::size_t i = 0; i < owned; ++i) {
+    std::vector<std::int32_t> want;
+    for (std::size_t j = 0; j < total; ++j) {
+      if (j == i) continue;
+      const double dx = p.x[3 * i] - p.x[3 * j], dy = p.x[3 * i + 1] - p.x[3 * j + 1],
+                   dz = p.x[3 * i + 2] - p.x[3 * j + 2];
+      const double cut = (d + static_cast<double>(h[i])) + static_cast<double>(h[j]);
+      if (dx * dx + dy * dy + dz * dz < cut * cut) want.push_back(static_cast<std::int32_t>(j));
+    }
+    std::sort(want.begin(), want.end(), [&](std::int32_t a, std::int32_t b) { return p.id[a] < p.id[b]; });
+    std::vector<std::int32_t> got;
+    for (std::int64_t e = list.offset[i]; e < list.offset[i + 1]; ++e) got.push_back(list.partner(e));
+    ASSERT_EQ(got, want) << "owned particle " << i;
+    entries += got.size();
+    max_row = std::max(max_row, got.size());
+  }
+  EXPECT_EQ(list.entries(), entries);
+  // the test must see what it is about: empty, short and long lists
+  EXPECT_GT(max_row, 20u);
+  EXPECT_GT(entries, 5 * owned);
 }
 
 TEST(DemNeighbor, PerParticleSkinsMissNoTouchingPairInADenseGas) {
