@@ -429,20 +429,20 @@ int main(int argc, char** argv) {
                     ranks);
         const fs::path scenes = fs::path(CGD_SOURCE_DIR) / "data" / "scenes";
         // the Table 1 scenes, then the PROFILE=half resolved runs (Makefile.pipeline: pipeline_demo.toml with
-        // its GENERATE_SET, at the six solids fractions of the full-range model, and its PHI_SET_<phi>: the dense
-        // runs at gamma* = 1e-3, twice the DEM steps of the dilute runs' 2e-3, docs/stiffness.md)
+        // its GENERATE_SET, at the six solids fractions of the full-range model, each with its gamma*: PHI_SET_<phi>
+        // gives the dense runs 1e-3, twice the DEM steps of the dilute runs' 2e-3, docs/stiffness.md)
         std::vector<std::pair<std::string, std::vector<std::string>>> runs;
         std::vector<fs::path> files;
         for (const auto& e : fs::directory_iterator(scenes))
           if (e.path().filename().string().rfind("table1_", 0) == 0) files.push_back(e.path());
         std::sort(files.begin(), files.end());
         for (const fs::path& f : files) runs.push_back({f.string(), {}});
-        for (const char* phi : {"0.02", "0.05", "0.10", "0.20", "0.30", "0.40"}) {
-          const bool dense = std::string(phi) >= "0.20";
+        constexpr std::pair<const char*, const char*> kHalfRuns[] = {
+            {"0.02", "2e-3"}, {"0.05", "2e-3"}, {"0.10", "2e-3"}, {"0.20", "1e-3"}, {"0.30", "1e-3"}, {"0.40", "1e-3"}};
+        for (const auto& [phi, gamma_star] : kHalfRuns)
           runs.push_back({(scenes / "pipeline_demo.toml").string(),
-                          {"domain.size_dp=[53,213,53]", dense ? "contact.gamma_star=1e-3" : "contact.gamma_star=2e-3",
+                          {"domain.size_dp=[53,213,53]", std::string("contact.gamma_star=") + gamma_star,
                            "run.end_time_tref=50", std::string("particles.solids_fraction=") + phi}});
-        }
         const double cells_here = static_cast<double>(tiled_cells[0]) * tiled_cells[1] * tiled_cells[2];
         for (const auto& [path, overrides] : runs) {
           const cgd::Scene s = cgd::load_scene(path, overrides);

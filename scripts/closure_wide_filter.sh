@@ -93,18 +93,17 @@ source "$repo/scripts/coarse_run.sh"
 launcher=()
 coarse_sets=()
 for s in "${coarse_set[@]}"; do coarse_sets+=(--set "$s"); done
-coarse() { local name=$1; shift; coarse_run "$dir/$name" "$@"; }  # name phi alpha seed [options...]
 for phi in "${phis[@]}"; do
   for alpha in "${alphas[@]}"; do
     for seed in "${seeds[@]}"; do
       for g in "${grids[@]}"; do
-        coarse "phi${phi}_a${alpha}_g${g}_s$seed" "$phi" "$alpha" "$seed" --model "$dir/perfect_g$g.h5" \
+        coarse_run "$dir/phi${phi}_a${alpha}_g${g}_s$seed" "$phi" "$alpha" "$seed" --model "$dir/perfect_g$g.h5" \
           --set fluid.parcel_correction=false
       done
       model=$(model_for "$phi")
       if [ -f "$model" ]; then
         for r in "${ratios[@]}"; do
-          coarse "phi${phi}_a${alpha}_r${r}_s$seed" "$phi" "$alpha" "$seed" --model "$model" \
+          coarse_run "$dir/phi${phi}_a${alpha}_r${r}_s$seed" "$phi" "$alpha" "$seed" --model "$model" \
             --set fluid.parcel_correction=false --set fluid.filter_to_grid_ratio="$r"
         done
       fi

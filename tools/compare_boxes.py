@@ -34,6 +34,7 @@ def fail(msg):
 
 
 Summary = collections.namedtuple("Summary", "bins mean_diff chi2_dof")  # of the common bins of a pair
+GRID_DATASETS = ("H", "H_low", "H_high", "H_stderr", "count", "phi_mean")  # what is read of each /grids/<N>
 
 
 def read_grids(path):
@@ -50,11 +51,11 @@ def read_grids(path):
             fail(f"{path}: no /grids (filter it with cgd-filter --grids)")
         out = {}
         for name, g in f["grids"].items():
-            for key in ("H", "H_low", "H_high", "H_stderr", "count", "phi_mean"):
+            for key in GRID_DATASETS:
                 if key not in g:
                     fail(f"{path}: /grids/{name}/{key} missing")
             out[int(name)] = {"dx_over_dp": float(g.attrs["dx_over_dp"]), "F": float(g.attrs["F"]),
-                              **{key: g[key][:] for key in ("H", "H_low", "H_high", "H_stderr", "count", "phi_mean")}}
+                              **{key: g[key][:] for key in GRID_DATASETS}}
         return out
 
 
