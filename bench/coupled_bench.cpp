@@ -40,6 +40,7 @@
 #include "core/schema/snapshot.hpp"
 #include "core/scene.hpp"
 #include "core/timers.hpp"
+#include "core/version.hpp"
 #include "sim/dem/placement.hpp"
 #include "sim/run.hpp"
 
@@ -205,7 +206,7 @@ int main(int argc, char** argv) {
       const double dt_dev = dt_developed > 0 ? dt_developed : c.dt_fluid_s;
       const double proj1_dev = dem_per_dem_step / x.dt_dem_s + (c.wall_s - dem) / dt_dev + io_per_phys_s;
       const double end = full.run.end_time_s;
-      std::printf("cgd-bench-coupled %s: %s\n", CGD_VERSION, full.name.c_str());
+      std::printf("cgd-bench-coupled %s: %s\n", cgd::code_version(), full.name.c_str());
       std::printf("scene %s: %.0f particles (%s), %d x %d x %d = %.0f cells, ranks %d\n", full.source_path.c_str(),
                   n_particles, full.particles.parcel_size == 1.0 ? "resolved" : "parcels", x.cells[0], x.cells[1],
                   x.cells[2], n_cells, ranks);

@@ -65,6 +65,7 @@
 #include "core/error.hpp"
 #include "core/scene.hpp"
 #include "core/timers.hpp"
+#include "core/version.hpp"
 #include "sim/coupled_step.hpp"
 #include "sim/dem/system.hpp"
 #include "sim/fluid/grid.hpp"
@@ -377,11 +378,11 @@ int main(int argc, char** argv) {
       }
       const double untimed_cpu = wall * ranks - fluid_cpu - dem_cpu;
       if (!from_run.empty())
-        std::printf("cgd-bench-developed %s: %s, the state of the run %s at step %lld (t = %.4g s)\n", CGD_VERSION,
+        std::printf("cgd-bench-developed %s: %s, the state of the run %s at step %lld (t = %.4g s)\n", cgd::code_version(),
                     full.name.c_str(), from_run.c_str(), static_cast<long long>(step0), step0 * ds.dt_s);
       else
         std::printf("cgd-bench-developed %s: %s developed %.3g t_ref in a box of %.4g x %.4g x %.4g d_p, tiled %d^3\n",
-                    CGD_VERSION, full.name.c_str(), develop_tref, small_dp[0], small_dp[1], small_dp[2], tile);
+                    cgd::code_version(), full.name.c_str(), develop_tref, small_dp[0], small_dp[1], small_dp[2], tile);
       std::printf("state: %lld particles, %.4g x %.4g x %.4g d_p, %d x %d x %d cells, ranks %d, friction %s\n",
                   static_cast<long long>(nt), tiled_dp[0], tiled_dp[1], tiled_dp[2], tiled_cells[0], tiled_cells[1],
                   tiled_cells[2], ranks, rotation ? "on" : "off");

@@ -11,10 +11,7 @@
 #include <sstream>
 
 #include "core/error.hpp"
-
-#ifndef CGD_VERSION
-#define CGD_VERSION "unknown"
-#endif
+#include "core/version.hpp"
 
 namespace cgd {
 
@@ -29,7 +26,7 @@ bool is_output_rank() {
 }
 
 void parse_command_line(CLI::App& app, int argc, char** argv, const std::string& tool_name) {
-  app.set_version_flag("--version", tool_name + " " + CGD_VERSION, "Print the version and exit");
+  app.set_version_flag("--version", tool_name + " " + code_version(), "Print the version and exit");
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

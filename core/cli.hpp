@@ -65,7 +65,7 @@ RunOptions parse_run_command_line(int argc, char** argv, const std::string& tool
                                   const std::string& description,
                                   const std::function<void(CLI::App&)>& add_options = {});
 
-/// For tools with their own options (cgd-filter, cgd-fit): adds --version (CGD_VERSION) and
+/// For tools with their own options (cgd-filter, cgd-fit): adds --version (core/version.hpp) and
 /// parses; a bad option, --help or --version throws CommandLineExit.
 void parse_command_line(CLI::App& app, int argc, char** argv, const std::string& tool_name);
 

@@ -10,6 +10,7 @@
 #include <sstream>
 
 #include "core/error.hpp"
+#include "core/version.hpp"
 
 namespace cgd::exporter {
 
@@ -251,7 +252,7 @@ std::string c_header(const ExportedModel& e) {
   const std::string api = P + "API";
   std::ostringstream o;
   o << "/* " << e.name << ".h: a filtered drag model of cgd (" << kind_name(e.kind)
-    << ") as a self-contained C99 evaluator. Written by cgd-export " << CGD_VERSION
+    << ") as a self-contained C99 evaluator. Written by cgd-export " << cgd::code_version()
     << "; do not edit, export again (docs/export.md).\n"
     << " *\n"
     << " *   beta_bar / beta_micro = c_corr(alpha) [1 - H(phi, Delta)],   H = h(phi) / (1 + a(phi) F^n),\n"
@@ -391,7 +392,7 @@ std::string fortran_module(const ExportedModel& e) {
   const std::string p = "cgd_" + e.name + "_";
   std::ostringstream o;
   o << "! " << e.name << ".f90: Fortran 2003 interfaces (bind(C)) to the functions of " << e.name
-    << ".h, written by cgd-export " << CGD_VERSION << ".\n"
+    << ".h, written by cgd-export " << cgd::code_version() << ".\n"
     << "! Compile the C functions once, from a C file holding\n"
     << "!   #define CGD_" << upper(e.name) << "_IMPLEMENTATION\n"
     << "!   #include \"" << e.name << ".h\"\n"
@@ -420,7 +421,7 @@ std::string fortran_module(const ExportedModel& e) {
 
 std::string pieces_csv(const ExportedModel& e) {
   std::ostringstream o;
-  o << "# " << e.name << "_pieces.csv: the curves of " << e.name << ".h in local form (cgd-export " << CGD_VERSION
+  o << "# " << e.name << "_pieces.csv: the curves of " << e.name << ".h in local form (cgd-export " << cgd::code_version()
     << "; docs/export.md)\n";
   for (const std::string& line : e.provenance) o << "# " << line << "\n";
   o << "# value = c0 + c1*x + c2*x^2 + c3*x^3, x = phi - phi0, on phi_lo <= phi < phi_hi (the last row of a curve also above);\n"
@@ -458,7 +459,7 @@ std::string h_table_csv(const ExportedModel& e, const std::function<double(doubl
                         const std::vector<double>& phis, const std::vector<double>& deltas_m, const Bands* bands) {
   std::ostringstream o;
   o << "# " << e.name << "_H.csv: H(phi, Delta) = h/(1 + a F^n) of " << e.name << ".h, as cgd's engine evaluates it (cgd-export "
-    << CGD_VERSION << "; docs/export.md)\n";
+    << cgd::code_version() << "; docs/export.md)\n";
   for (const std::string& line : e.provenance) o << "# " << line << "\n";
   o << "# beta_bar / beta_micro = c_corr(alpha) (1 - H), c_corr(alpha) = " << csv_number(e.c_corr_a) << " + (1 - "
     << csv_number(e.c_corr_a) << ") exp(-" << csv_number(e.c_corr_k) << " (alpha - 1)); F = L_char / Delta, L_char = "

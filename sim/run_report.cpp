@@ -1,5 +1,6 @@
 // The banner and the timing report of a run (sim/run_report.hpp).
 #include "sim/run_report.hpp"
+#include "core/version.hpp"
 
 #include <algorithm>
 #include <cstdio>
@@ -10,7 +11,7 @@ namespace cgd {
 std::string run_banner(const RunBanner& b) {
   std::ostringstream o;
   o.precision(4);
-  o << b.tool << " " << CGD_VERSION << "\n";
+  o << b.tool << " " << cgd::code_version() << "\n";
   // The scene's table with the engine's memory estimate (the scene alone cannot know what the libraries,
   // the placement and the solvers take): one memory row, the one compared with the measured peak at the end.
   Scene shown = *b.scene;

@@ -12,10 +12,7 @@
 
 #include "core/error.hpp"
 #include "core/scene.hpp"
-
-#ifndef CGD_VERSION
-#define CGD_VERSION "unknown"
-#endif
+#include "core/version.hpp"
 
 namespace cgd::schema {
 namespace {
@@ -157,7 +154,7 @@ void write_common(h5::File& file, const Format& format, const Scene& scene) {
   using namespace names;
   file.set_attr(kRoot, kFormat, std::string(format.name));
   file.set_attr(kRoot, kFormatVersion, format.version);
-  file.set_attr(kRoot, kCodeVersion, std::string(CGD_VERSION));
+  file.set_attr(kRoot, kCodeVersion, std::string(code_version()));
   file.set_attr(kRoot, kCreated, utc_now_iso8601(file.comm()));
   file.set_attr(kRoot, kScene, scene.effective_toml);
   write_params(file, scene);

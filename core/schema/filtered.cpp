@@ -10,6 +10,7 @@
 #include "core/schema/common.hpp"
 #include "core/schema/calibration.hpp"
 #include "core/schema/check.hpp"
+#include "core/version.hpp"
 
 namespace cgd::schema {
 
@@ -155,7 +156,7 @@ void write_root(h5::File& f, const Scene* scene, const Filtered& s) {
   } else {
     f.set_attr("/", "cgd_format", std::string(kFiltered.name));
     f.set_attr("/", "cgd_format_version", kFiltered.version);
-    f.set_attr("/", "code_version", std::string(CGD_VERSION));
+    f.set_attr("/", "code_version", std::string(code_version()));
     f.set_attr("/", kScene, s.scene_toml);
   }
   write_physical_system(f, s.system, names::kMicroLawAttribute);

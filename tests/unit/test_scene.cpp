@@ -16,6 +16,7 @@
 #include "core/error.hpp"
 #include "core/scales.hpp"
 #include "core/scene.hpp"
+#include "core/version.hpp"
 
 namespace {
 
@@ -925,7 +926,7 @@ TEST(CommandLine, VersionPrintsToolNameAndVersion) {
     parse({"cgd-generate", "--version"});
     FAIL();
   } catch (const cgd::CommandLineExit& e) {
-    EXPECT_NE(e.out_text().find(std::string("cgd-generate ") + CGD_VERSION), std::string::npos)
+    EXPECT_NE(e.out_text().find(std::string("cgd-generate ") + cgd::code_version()), std::string::npos)
         << e.out_text();
   }
 }
