@@ -9,7 +9,7 @@
 #   radl       radl2014, the published model;
 # each at alpha = ALPHAS and realisations SEEDS, c_corr off for the tables (the grid's own correction; radl2014 keeps
 # the paper's c_corr(alpha)), the
-# pipeline's coarse settings (the half profile's COARSE_SET: sampled 40-80 t_ref); then the table of the slip
+# pipeline's coarse settings (the half profile's COARSE_SET: sampled 40-80 t_ref, and its PHI_SET_<phi>); then the table of the slip
 # error against each resolved run (tools/closure_wide_table.py) -> DIR/table.md.
 #
 # usage: scripts/closure_drift.sh OUT [PHIS=0.02,0.05,0.10] [ALPHAS=3,4,6] [SEEDS=1,2,3] [CLOSURES=...]
@@ -103,6 +103,10 @@ launcher=()
 coarse_sets=()
 for s in "${coarse_set[@]}"; do coarse_sets+=(--set "$s"); done
 for phi in "${phis[@]}"; do
+  # the profile's settings of this solids fraction (PHI_SET_<phi>, e.g. the dense runs' gamma* = 1e-3), after the
+  # others as the pipeline gives them
+  phi_sets=()
+  for s in $(cd "$repo" && mk "print-PHI_SET_$phi"); do phi_sets+=(--set "$s"); done
   for alpha in "${alphas[@]}"; do
     for seed in "${seeds[@]}"; do
       for c in "${closures[@]}"; do
@@ -114,7 +118,7 @@ for phi in "${phis[@]}"; do
           *) echo "closure_drift.sh: closure $c is not one of driftheld, driftown, tableheld, tableown, radl" >&2; exit 2 ;;
         esac
         coarse_run "$runs_dir/phi${phi}_a${alpha}_${c}_s$seed" "$phi" "$alpha" "$seed" \
-          --set fluid.drag_own_deposit="$own_deposit" "${args[@]}"
+          --set fluid.drag_own_deposit="$own_deposit" "${args[@]}" "${phi_sets[@]}"
       done
     done
   done
