@@ -12,6 +12,7 @@ Prints per run: snapshots used, the mean over them of the densest layer's phi an
 densest cell, and the last snapshot's layer profile. Exit status 0; 2 for a directory without snapshots in the window.
 (Debian's h5py/numpy belong to /usr/bin/python3.)"""
 import argparse
+import collections
 import glob
 import os
 import sys
@@ -19,6 +20,9 @@ import sys
 import h5py
 import numpy as np
 
+
+
+Profile = collections.namedtuple("Profile", "n dense spread cmax last")
 
 
 def profile(run, cells, from_tref):
@@ -45,7 +49,7 @@ def profile(run, cells, from_tref):
         last = layers
     if not dens:
         return None
-    return dict(n=len(dens), dense=np.mean(dens), spread=np.mean(spread), cmax=cmax, last=last)
+    return Profile(len(dens), float(np.mean(dens)), float(np.mean(spread)), float(cmax), last)
 
 
 def main():
@@ -66,13 +70,13 @@ def main():
             print(f"layer_profile: {run}: no snapshot at or after {a.from_tref} t_ref", file=sys.stderr)
             status = 2
             continue
-        prof = " ".join(f"{v:.2f}" for v in p["last"])
+        prof = " ".join(f"{v:.2f}" for v in p.last)
         if a.markdown:
-            print(f"| {os.path.basename(os.path.normpath(run))} | {p['n']} | {p['dense']:.3f} | {p['spread']:.3f} | "
-                  f"{p['cmax']:.2f} | {prof} |")
+            print(f"| {os.path.basename(os.path.normpath(run))} | {p.n} | {p.dense:.3f} | {p.spread:.3f} | "
+                  f"{p.cmax:.2f} | {prof} |")
         else:
-            print(f"{run}: {p['n']} snapshots, densest layer {p['dense']:.3f}, lateral spread {p['spread']:.3f}, "
-                  f"densest cell {p['cmax']:.2f}\n  last: {prof}")
+            print(f"{run}: {p.n} snapshots, densest layer {p.dense:.3f}, lateral spread {p.spread:.3f}, "
+                  f"densest cell {p.cmax:.2f}\n  last: {prof}")
     return status
 
 
