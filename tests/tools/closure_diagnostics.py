@@ -32,18 +32,9 @@ import tempfile
 import h5py
 import numpy as np
 
-source = sys.argv[1] if len(sys.argv) > 1 else os.path.join(os.path.dirname(__file__), "..", "..")
+from tool_check import check, failures, source  # noqa: E402  (tests/tools/tool_check.py)
 tool = os.path.join(source, "tools", "closure_diagnostics.py")
-sys.path.insert(0, os.path.join(source, "tools"))
 import closure_diagnostics as cd  # noqa: E402
-
-failures = 0
-
-
-def check(ok, what):
-    global failures
-    print(("ok   " if ok else "FAIL ") + what)
-    failures += not ok
 
 
 def snapshot(path, time, vy, box=(2.0, 2.0, 2.0), drop=None):
@@ -163,5 +154,5 @@ with tempfile.TemporaryDirectory() as tmp:
         check(out.returncode == 2 and "snap_1.h5" in out.stderr and "Traceback" not in out.stderr,
               f"{label}: exit 2 naming the file ({out.returncode}: {out.stderr.strip()})")
 
-print(f"{failures} failure(s)")
-sys.exit(1 if failures else 0)
+print(f"{failures()} failure(s)")
+sys.exit(1 if failures() else 0)

@@ -19,16 +19,8 @@ import tempfile
 import h5py
 import numpy as np
 
-source = sys.argv[1] if len(sys.argv) > 1 else os.path.join(os.path.dirname(__file__), "..", "..")
+from tool_check import check, failures, source  # noqa: E402  (tests/tools/tool_check.py)
 tool = os.path.join(source, "tools", "closure_two_marker.py")
-failures = 0
-
-
-def check(ok, what):
-    global failures
-    print(("ok   " if ok else "FAIL ") + what)
-    failures += not ok
-
 
 def snapshot(path, slips):
     """Cubes (0,0,0) and (1,0,0) hold two particles each; their gas moves up at slips[0] and slips[1] m/s."""
@@ -106,5 +98,5 @@ with tempfile.TemporaryDirectory() as tmp:
     check(r.returncode == 2 and "empty" in r.stderr and "Traceback" not in r.stderr,
           f"a run without snapshots: exit 2 naming it ({r.stderr.strip()[:120]})")
 
-print("closure_two_marker:", "all checks passed" if failures == 0 else f"{failures} check(s) FAILED")
-sys.exit(1 if failures else 0)
+print("closure_two_marker:", "all checks passed" if failures() == 0 else f"{failures()} check(s) FAILED")
+sys.exit(1 if failures() else 0)

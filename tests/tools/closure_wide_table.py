@@ -15,16 +15,8 @@ import tempfile
 
 import h5py
 
-source = sys.argv[1] if len(sys.argv) > 1 else os.path.join(os.path.dirname(__file__), "..", "..")
+from tool_check import check, failures, source  # noqa: E402  (tests/tools/tool_check.py)
 tool = os.path.join(source, "tools", "closure_wide_table.py")
-failures = 0
-
-
-def check(ok, what):
-    global failures
-    print(("ok   " if ok else "FAIL ") + what)
-    failures += not ok
-
 
 def summary(path, slip, se):
     os.makedirs(os.path.dirname(path), exist_ok=True)
@@ -58,5 +50,5 @@ with tempfile.TemporaryDirectory() as d:
     png = os.path.join(d, "figure.png")
     p = subprocess.run([sys.executable, tool, d, "--plot", png], capture_output=True, text=True)
     check(p.returncode == 0 and os.path.getsize(png) > 0, f"--plot writes the picture ({p.stderr.strip()})")
-print(f"{failures} failed" if failures else "all passed")
-sys.exit(1 if failures else 0)
+print(f"{failures()} failed" if failures() else "all passed")
+sys.exit(1 if failures() else 0)

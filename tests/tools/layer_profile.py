@@ -19,18 +19,9 @@ import tempfile
 import h5py
 import numpy as np
 
-source = sys.argv[1] if len(sys.argv) > 1 else os.path.join(os.path.dirname(__file__), "..", "..")
+from tool_check import check, failures, source  # noqa: E402  (tests/tools/tool_check.py)
 tool = os.path.join(source, "tools", "layer_profile.py")
-sys.path.insert(0, os.path.join(source, "tools"))
 import layer_profile as lp  # noqa: E402
-
-failures = 0
-
-
-def check(ok, what):
-    global failures
-    print(("ok   " if ok else "FAIL ") + what)
-    failures += not ok
 
 
 BOX = np.array([4e-3, 16e-3, 4e-3])
@@ -77,5 +68,5 @@ with tempfile.TemporaryDirectory() as tmp:
     r = subprocess.run([sys.executable, tool, run, "--from-tref", "40"], capture_output=True, text=True)
     check(r.returncode == 2 and "no snapshot at or after 40" in r.stderr, f"no snapshot in the window: exit {r.returncode}")
 
-print("layer_profile: " + ("OK" if failures == 0 else f"{failures} FAILED"))
-sys.exit(1 if failures else 0)
+print("layer_profile: " + ("OK" if failures() == 0 else f"{failures()} FAILED"))
+sys.exit(1 if failures() else 0)

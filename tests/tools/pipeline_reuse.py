@@ -10,16 +10,8 @@ import tempfile
 
 import h5py
 
-source = sys.argv[1] if len(sys.argv) > 1 else os.path.join(os.path.dirname(__file__), "..", "..")
+from tool_check import check, failures, source  # noqa: E402  (tests/tools/tool_check.py)
 tool = os.path.join(source, "tools", "pipeline_reuse.py")
-failures = 0
-
-
-def check(ok, what):
-    global failures
-    print(("ok   " if ok else "FAIL ") + what)
-    failures += not ok
-
 
 def model(path, a, k):
     with h5py.File(path, "w") as f:
@@ -61,4 +53,4 @@ with tempfile.TemporaryDirectory() as tmp:
     check(not os.path.exists(out + ".tmp"), "no temporary directory left")
     check(run("--link", os.path.join(coarse, "nothing"), os.path.join(coarse, "x")) == 2 and
           not os.path.exists(os.path.join(coarse, "x")), "--link from an incomplete run: exit 2, nothing made")
-sys.exit(1 if failures else 0)
+sys.exit(1 if failures() else 0)

@@ -14,18 +14,9 @@ import tempfile
 import h5py
 import numpy as np
 
-source = sys.argv[1] if len(sys.argv) > 1 else os.path.join(os.path.dirname(__file__), "..", "..")
+from tool_check import check, failures, source  # noqa: E402  (tests/tools/tool_check.py)
 tool = os.path.join(source, "tools", "run_health.py")
-sys.path.insert(0, os.path.join(source, "tools"))
 import run_health as rh  # noqa: E402
-
-failures = 0
-
-
-def check(ok, what):
-    global failures
-    print(("ok   " if ok else "FAIL ") + what)
-    failures += not ok
 
 
 def write_series(path, n=101, drop=None, short=None):
@@ -76,5 +67,5 @@ with tempfile.TemporaryDirectory() as tmp:
     out = subprocess.run([sys.executable, tool, good, "--window", "0"], capture_output=True, text=True)
     check(out.returncode == 2, "--window 0 refused")
 
-print(f"{failures} failure(s)")
-sys.exit(1 if failures else 0)
+print(f"{failures()} failure(s)")
+sys.exit(1 if failures() else 0)

@@ -11,17 +11,8 @@ import tempfile
 import h5py
 import numpy as np
 
-source = sys.argv[1] if len(sys.argv) > 1 else os.path.join(os.path.dirname(__file__), "..", "..")
-sys.path.insert(0, os.path.join(source, "tools"))
+from tool_check import check, failures, source  # noqa: E402  (tests/tools/tool_check.py)
 import stiffness_table as st  # noqa: E402
-
-failures = 0
-
-
-def check(ok, what):
-    global failures
-    print(("ok   " if ok else "FAIL ") + what)
-    failures += not ok
 
 
 d, box = 1e-4, np.array([1e-3, 2e-3, 1e-3])
@@ -50,4 +41,4 @@ check(c0 == 0.0 and n0 == 2, f"chi2 against itself: {c0} over {n0} bins (0 over 
 check(abs(c1 - 0.5) < 1e-12 and n1 == 2, f"chi2 shifted by one sigma: {c1} (0.5)")
 phi, h, e = st.modal(b)
 check(phi == 0.02 and h == 0.4 and e == 0.02, f"modal bin: phi {phi} H {h} +- {e} (0.02, 0.4, 0.02)")
-sys.exit(1 if failures else 0)
+sys.exit(1 if failures() else 0)

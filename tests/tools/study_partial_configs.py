@@ -11,7 +11,7 @@ import tempfile
 
 import h5py
 
-source = sys.argv[1] if len(sys.argv) > 1 else os.path.join(os.path.dirname(__file__), "..", "..")
+from tool_check import check, failures, source  # noqa: E402  (tests/tools/tool_check.py)
 runs = [(0.02, 2, 0.03, 5.0), (0.05, 2, 0.04, 6.0), (0.10, 2, 0.12, 9.0), (0.02, 1, 0.01, 300.0), (0.05, 1, 0.02, 900.0)]
 with tempfile.TemporaryDirectory() as tmp:
     dirs = []
@@ -32,13 +32,6 @@ with tempfile.TemporaryDirectory() as tmp:
                           "-o", os.path.join(tmp, "study")], capture_output=True, text=True)
     print(out.stdout[-1500:], out.stderr[-1500:])
     lines = out.stdout.splitlines()
-    failures = 0
-
-    def check(ok, what):
-        global failures
-        print(("ok   " if ok else "FAIL ") + what)
-        failures += not ok
-
     check(out.returncode == 0, "study.py exits 0")
     check(any("within 5 % at every solids fraction (upper 68 % bound of the worst |error|): none" in l for l in lines),
           "no configuration is within 5 % at every solids fraction (alpha = 1 never ran at 0.10)")
@@ -50,4 +43,4 @@ with tempfile.TemporaryDirectory() as tmp:
     with h5py.File(os.path.join(tmp, "study.h5"), "r") as f:
         alpha, pareto = f["alpha"][()], f["pareto"][()]
         check(all(p == 0 for a, p in zip(alpha, pareto) if a == 1), "study.h5: no alpha = 1 row on the Pareto front")
-sys.exit(1 if failures else 0)
+sys.exit(1 if failures() else 0)

@@ -18,16 +18,8 @@ import tempfile
 import h5py
 import numpy as np
 
-source = sys.argv[1] if len(sys.argv) > 1 else os.path.join(os.path.dirname(__file__), "..", "..")
+from tool_check import check, failures, source  # noqa: E402  (tests/tools/tool_check.py)
 study = os.path.join(source, "tools", "study.py")
-failures = 0
-
-
-def check(ok, what):
-    global failures
-    print(("ok   " if ok else "FAIL ") + what)
-    failures += not ok
-
 
 def summary(path, phi, alpha, drag, seed, slip, se, cost, drift=0.0):
     with h5py.File(path, "w") as f:
@@ -124,4 +116,4 @@ with tempfile.TemporaryDirectory() as tmp:
     bad = subprocess.run(["/usr/bin/python3", study, "--coarse", *coarse, "--resolved", tmp, "-o",
                           os.path.join(tmp, "bad")], capture_output=True, text=True)
     check(bad.returncode == 2 and "cgd-coarse --summarise" in bad.stderr, "a run directory as --resolved: exit 2, says what to give")
-sys.exit(1 if failures else 0)
+sys.exit(1 if failures() else 0)
