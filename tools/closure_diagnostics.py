@@ -175,7 +175,7 @@ def snapshot_cells(path, n_cells, from_tref):
     cell_volume = float(np.prod(hs))
     fine_volume = float(np.prod(spacing))
     weight = consts["rho_p"] * consts["g"]  # per unit particle volume
-    return dict(flat=flat, solids=solids, momentum=momentum, e=e_c, eu=eu_c, cell_volume=cell_volume,
+    return dict(flat=flat, grid=grid, solids=solids, momentum=momentum, e=e_c, eu=eu_c, cell_volume=cell_volume,
                 drag_share=beta * (u_p - v[:, 1]) / weight, pressure_share=-dpdy / weight,
                 subgrid_share=flux["subgrid"][flat], grid_share=flux["grid"][flat],
                 n=n, v_y=v[:, 1], v_mean=float(v[:, 1].mean()), dpdy_mean=float(dpdy.mean()),
