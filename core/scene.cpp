@@ -155,6 +155,45 @@ ContactConfig read_contact(const SceneReader& in) {
   return c;
 }
 
+/// [particle_stress]: the particle-phase pressure of core/particle_stress.hpp, on the fluid grid's cells (so only
+/// when the fluid is solved); every key but `model` is refused while the model is "none".
+ParticleStressParams read_particle_stress(const SceneReader& in, const ToolAccepts& accepts, const FluidConfig& f) {
+  ParticleStressParams p;
+  if (!in.has_section("particle_stress")) return p;
+  p.model = in.choice<ParticleStressModel>(
+      "particle_stress", "model",
+      {{"none", ParticleStressModel::None}, {"harris-crighton", ParticleStressModel::HarrisCrighton}}, p.model);
+  if (p.model == ParticleStressModel::None) {
+    for (const char* key : {"p_s", "beta", "phi_packed", "epsilon"})
+      if (in.has("particle_stress", key))
+        in.fail_value("particle_stress", key,
+                      "is only used with particle_stress.model = \"harris-crighton\" (the model is \"none\"); remove "
+                      "it or set the model");
+    return p;
+  }
+  if (!accepts.filtered_drag)
+    in.fail_value("particle_stress", "model",
+                  "is a closure of the coarse grid (cgd-coarse): a resolved run (cgd-generate) resolves the particle "
+                  "phase's stresses through its contacts; remove [particle_stress]");
+  if (f.coupling == Coupling::Quiescent)
+    in.fail_value("particle_stress", "model",
+                  "needs a solved fluid (fluid.coupling = \"two-way\" or \"one-way\"): the pressure's gradient is "
+                  "taken on the fluid grid's cells, and a quiescent fluid has no grid");
+  if (auto v = in.number("particle_stress", "p_s")) p.p_s_Pa = in.positive("particle_stress", "p_s", *v);
+  if (auto v = in.number("particle_stress", "beta"))
+    if (!(*v >= 2.0 && *v <= 10.0))
+      in.fail_value("particle_stress", "beta",
+                    "must be in [2, 10] (Snider 2001 uses 2 to 5; below 2 the potential of the discrete force, "
+                    "integral_0^phi tau(s)/s^2 ds, diverges at phi = 0: core/particle_stress.hpp)");
+    else
+      p.beta = *v;
+  if (auto v = in.number("particle_stress", "phi_packed"))
+    p.phi_packed = in.in_range("particle_stress", "phi_packed", *v, 0.0, 1.0, false);
+  if (auto v = in.number("particle_stress", "epsilon"))
+    p.epsilon = in.in_range("particle_stress", "epsilon", *v, 0.0, 1.0, true);
+  return p;
+}
+
 /// [fluid] (absent: a dry run, and gamma_star is refused): density below the particles', viscosity,
 /// Courant number, coupling, drag law (the tool's ToolAccepts), the model file and its checksum, the grid
 /// (cells or dx_over_dp; required when the fluid is solved).
@@ -270,8 +309,12 @@ std::optional<FluidConfig> read_fluid(const SceneReader& in, const ToolAccepts& 
                     "particles the fluid's periodic pressure gradient has no counterpart and the mixture momentum "
                     "is not conserved (docs/models.md \"Periodic driving\"); switch it off only with "
                     "fluid.coupling = \"one-way\" or \"quiescent\"");
+    f.particle_stress = read_particle_stress(in, accepts, f);
     return f;
   } else {
+    if (in.has_section("particle_stress"))
+      in.fail("[particle_stress] needs a [fluid] section with a solved fluid: the particle-phase pressure acts "
+              "through the fluid grid's cells (docs/scene-keys.md); remove the section");
     if (c.gamma_star)
       in.fail_value(
           "contact", "gamma_star",
@@ -677,6 +720,12 @@ std::string describe_scene(const Scene& s) {
       row("pressure-gradient force", "on (buoyancy of the fluid at rest)");
     else
       row("pressure-gradient force", f.pressure_gradient_force ? "on" : "off");
+    const ParticleStressParams& ps = f.particle_stress;
+    if (ps.model == ParticleStressModel::HarrisCrighton)
+      row("particle-phase pressure", "Harris-Crighton, P_s = " + with_unit(ps.p_s_Pa, "Pa") + ", beta = " + num(ps.beta) +
+                                         ", phi_cp = " + num(ps.phi_packed) + ", eps = " + num(ps.epsilon));
+    else
+      row("particle-phase pressure", "off");
   }
   const double g = norm(s.domain.gravity_m_s2);
   row("gravity", g > 0 ? "on " + vec(s.domain.gravity_m_s2) + " m/s^2" : "off");

@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "core/drag.hpp"  // DragLaw: the drag-law table
+#include "core/particle_stress.hpp"  // ParticleStressParams: [particle_stress]
 
 namespace cgd {
 
@@ -73,6 +74,8 @@ struct FluidConfig {
   // drag = "model": the file, read once by load_scene and checked there against the scene's physical
   // system (check_model_matches_scene); the engine uses it as it is (filtered_drag_setup reads nothing)
   std::shared_ptr<const DragModel> drag_model;
+  // [particle_stress] (model "none": nothing of it is allocated or computed; core/particle_stress.hpp)
+  ParticleStressParams particle_stress;
 };
 
 struct RunConfig {

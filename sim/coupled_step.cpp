@@ -53,6 +53,7 @@ CoupledStep::CoupledStep(const Scene& scene, fluid::FluidGrid& grid, double dt_d
   cs.drag_own_deposit = f.drag_own_deposit;
   cs.void_fraction_floor = scene.numerics.void_fraction_floor;
   cs.particle_body_accel = driving.particle_body_accel_m_s2;
+  cs.particle_stress = f.particle_stress;
   coupler_ = std::make_unique<coupling::Coupler>(cs, grid_);
   pressure_gradient_mean_ = driving.pressure_gradient_mean_Pa_m;
   // Particle drag is explicit over a fluid step (momentum exchange exact, coupler.hpp): keep

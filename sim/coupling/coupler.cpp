@@ -26,6 +26,65 @@ Coupler::Coupler(const CouplerSettings& settings, const fluid::FluidGrid& grid) 
     for (int d = 0; d < 3; ++d) drift_mv_[d] = grid.make_field();
     drift_cells_.assign(3 * grid.storage_size(), 0.0);
   }
+  stress_ = settings.particle_stress.model != ParticleStressModel::None;
+  if (stress_) {  // allocated only when the scene has a particle-phase pressure
+    stress_mu_ = grid.make_field();
+    stress_potential_ = std::make_unique<StressPotential>(settings.particle_stress);
+  }
+}
+
+void Coupler::particle_stress_accelerations(std::size_t n) {
+  const fluid::FluidGrid& g = grid_;
+  const int nx = g.nx(), nz = g.nz(), ny = g.ny_local();
+  const StressPotential& mu = *stress_potential_;
+  for (int j = 0; j < ny; ++j)
+    for (int k = 0; k < nz; ++k)
+      for (int i = 0; i < nx; ++i) {
+        const std::size_t c = g.index(i, j, k);
+        stress_mu_[c] = mu(phi_[c]);
+      }
+  exchange_interleaved_ghosts(g.comm(), view_, stress_mu_.data(), 1);
+  const double* m = stress_mu_.data();
+  const auto& h = g.spacing();
+  const double v_over_m = s_.particle_volume_m3 / s_.particle_mass_kg * s_.parcel_volume_factor;  // 1/rho_p
+  pc_.stress_accel.assign(3 * n, 0.0);
+  double sum[4] = {0.0, 0.0, 0.0, static_cast<double>(n)};
+  for (std::size_t i = 0; i < n; ++i) {
+    // grad w_pc of the TSC weights: d/dx of w(d) along one axis (stencil_weights' derivatives, d = s - c - 1/2,
+    // ds/dx = 1/h) times the other two axes' weights
+    const Stencil& st = stencil_[i];
+    double w[3][3], dw[3][3];
+    for (int a = 0; a < 3; ++a) {
+      stencil_weights(st.d[a], w[a]);
+      dw[a][0] = -(0.5 - st.d[a]) / h[a];
+      dw[a][1] = -2.0 * st.d[a] / h[a];
+      dw[a][2] = (0.5 + st.d[a]) / h[a];
+    }
+    int ix[3], iz[3];
+    for (int a = 0; a < 3; ++a) {
+      ix[a] = wrap_index(st.first[0] + a, view_.cells[0]);
+      iz[a] = wrap_index(st.first[2] + a, view_.cells[2]);
+    }
+    double grad[3] = {0.0, 0.0, 0.0};
+    for (int c = 0; c < 3; ++c)
+      for (int b = 0; b < 3; ++b) {
+        const std::size_t row = view_.index(0, st.first[1] + b, iz[c]);
+        for (int a = 0; a < 3; ++a) {
+          const double mc = m[row + static_cast<std::size_t>(ix[a])];
+          grad[0] += mc * dw[0][a] * w[1][b] * w[2][c];
+          grad[1] += mc * w[0][a] * dw[1][b] * w[2][c];
+          grad[2] += mc * w[0][a] * w[1][b] * dw[2][c];
+        }
+      }
+    for (int d = 0; d < 3; ++d) {
+      pc_.stress_accel[3 * i + d] = -v_over_m * grad[d];
+      sum[d] += pc_.stress_accel[3 * i + d];
+    }
+  }
+  MPI_Allreduce(MPI_IN_PLACE, sum, 4, MPI_DOUBLE, MPI_SUM, g.comm());
+  if (sum[3] > 0)
+    for (std::size_t i = 0; i < n; ++i)
+      for (int d = 0; d < 3; ++d) pc_.stress_accel[3 * i + d] -= sum[d] / sum[3];
 }
 
 void Coupler::drift_cell_velocity() {
@@ -91,6 +150,7 @@ void Coupler::compute_drag(const dem::Particles& p, fluid::FluidState& state) {
     accumulate_ghosts(g.comm(), view_, {drift_mv_[0].data(), drift_mv_[1].data(), drift_mv_[2].data()});
     drift_mass_ = phi_;  // the raw deposit sum_p V_p w_pc / V_cell, before the floor changes phi_
   }
+  if (stress_) particle_stress_accelerations(n);  // from the raw deposit, before the floor changes phi_
   // void fraction with a conservative floor
   const std::size_t first = g.first_owned(), last = first + g.owned_size();
   double excess = 0, room = 0, local_max = 0;
@@ -237,6 +297,8 @@ void Coupler::compute_particle_forces(dem::Particles& p, fluid::FluidState& stat
   };
   if (drift_) forces(std::true_type{});
   else forces(std::false_type{});
+  if (stress_)
+    for (std::size_t k = 0; k < 3 * p.n_owned; ++k) p.a_ext[k] += pc_.stress_accel[k];
 }
 
 }  // namespace cgd::coupling

@@ -34,15 +34,23 @@
 // B_c V_c = sum_p beta_p V_p (v_p + d_p) w_pc / V_cell, the particle a_p = beta_p V_p (u_p^{n+1} - v_p - d_p)/m + ...,
 // so the momentum argument below holds unchanged (d_p enters both sides with the same weights). With every other
 // law nothing of this is allocated or done, and their results are those of the code without it, bit for bit.
+// The particle-phase pressure ([particle_stress], core/particle_stress.hpp), and only it, adds to step 1 the
+// potential mu_c = mu(phi_c) of each cell's raw deposit and each particle's a_p = -(V_p/m_p) sum_c mu_c grad w_pc
+// (the gradient of the cells' free energy; MP-PIC's -grad tau / (rho_p phi) in the continuum limit, Snider 2001),
+// held over the fluid step and added in step 4. The particles' forces need not sum to zero on a fixed grid (the
+// energy is not invariant under a shift of all particles against the cells), so the sum over all particles is
+// taken off each particle equally: the stress is internal and moves no momentum into or out of the particle phase.
 // One-way coupling: steps 1-2 still give eps and the particle drag, but the fluid is solved as a pure
 // fluid (B = 0 and eps = 1 in its equations: a fluid that gets out of the particles' way without being
 // pushed develops a growing displacement flow), with hydrostatic driving (G = rho_f g; sim/coupled_step.hpp
 // periodic_driving, which also states the driving without the pressure-gradient force).
 #include <array>
+#include <memory>
 #include <vector>
 
 #include "core/drag.hpp"
 #include "core/filtered_drag.hpp"
+#include "core/particle_stress.hpp"
 #include "core/scene.hpp"
 #include "sim/coupling/exchange.hpp"
 #include "sim/dem/particles.hpp"
@@ -65,6 +73,7 @@ struct CouplerSettings {
   bool drag_own_deposit = true;
   double void_fraction_floor = 0.3;    // eps_min
   std::array<double, 3> particle_body_accel{};  // g less the mean pressure gradient's V_p G/m (coupled_step.hpp periodic_driving)
+  ParticleStressParams particle_stress;         // [particle_stress]; model None: nothing below is allocated or done
 };
 
 /// Per-particle coupling quantities of the last `compute_drag` (owned particles, current order).
@@ -76,6 +85,9 @@ struct ParticleCoupling {
   // beta_p V_p (u_p - v_p - d_p), so beta is the micro law's coefficient
   std::vector<double> drift_shift;
   std::vector<double> cell_slip;         // drift law only: s~_p = u_p - vbar_p, 3 per particle, m/s
+  // particle-phase pressure only (empty otherwise): a_p = -(V_p/m_p) sum_c mu_c grad w_pc less its mean
+  // over all particles, 3 per particle, m/s^2 (from the deposit of compute_drag; added by compute_particle_forces)
+  std::vector<double> stress_accel;
 };
 
 class Coupler {
@@ -104,7 +116,14 @@ class Coupler {
   /// Drift law: the owned cells' mean particle velocity (or u_c where nothing is deposited) into drift_cells_
   /// (3 per cell, interleaved), then its ghost rows. After cell_fields(state, true). Collective.
   void drift_cell_velocity();
+  /// Particle-phase pressure: mu(phi_c) of the raw deposit on the owned cells (its ghost rows exchanged), and at
+  /// each of the `n` owned particles a_p = -(V_p/m_p) sum_c mu_c grad w_pc with its stencil, into pc_.stress_accel,
+  /// less the mean over all particles. Before the void-fraction floor alters phi_. Collective.
+  void particle_stress_accelerations(std::size_t n);
   CouplerSettings s_;
+  bool stress_ = false;            // particle_stress.model != None: the two members below are used
+  std::vector<double> stress_mu_;  // stress only: mu(phi_c), a grid field
+  std::unique_ptr<StressPotential> stress_potential_;  // stress only
   bool drift_ = false;             // fluid.drag = "drift": the cell-mean velocity deposit below is used
   std::vector<double> drift_mass_, drift_mv_[3];  // drift only: sum V w / V_cell (raw) and sum V w v / V_cell
   std::vector<double> drift_cells_;               // drift only: vbar_c, 3 per cell
