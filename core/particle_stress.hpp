@@ -26,6 +26,7 @@
 // into alternating layers of phi 0.40 and 0.00 (docs/closure.md). beta >= 2 keeps the integral finite at phi = 0.
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <vector>
 
 namespace cgd {
@@ -38,6 +39,10 @@ struct ParticleStressParams {
   double beta = 3.0;         // exponent of phi, >= 2
   double phi_packed = 0.6;   // phi_cp
   double epsilon = 1e-7;     // the denominator's floor, relative to 1 - phi
+  // Set by the engine, not a scene key (sim/coupled_step.cpp): the largest tau' (Pa) an explicit force held over the
+  // longest fluid step can carry, rho_p (C h / dt_fluid,max)^2 with C = numerics.particle_stress_courant; above the
+  // phi where tau' reaches it, mu continues linearly (StressPotential). Infinite: no cap.
+  double max_stiffness_Pa = std::numeric_limits<double>::infinity();
 };
 
 /// tau(phi) of the Harris-Crighton form above, Pa (0 for phi <= 0).
@@ -47,18 +52,33 @@ inline double harris_crighton_stress(const ParticleStressParams& s, double phi) 
   return s.p_s_Pa * std::pow(phi, s.beta) / gap;
 }
 
+/// tau'(phi) of the Harris-Crighton form, Pa (0 for phi <= 0).
+inline double harris_crighton_stiffness(const ParticleStressParams& s, double phi) {
+  if (!(phi > 0.0)) return 0.0;
+  const bool packed = s.phi_packed - phi < s.epsilon * (1.0 - phi);
+  const double gap = packed ? s.epsilon * (1.0 - phi) : s.phi_packed - phi;
+  const double dgap = packed ? -s.epsilon : -1.0;
+  return s.p_s_Pa * (s.beta * std::pow(phi, s.beta - 1.0) / gap - std::pow(phi, s.beta) * dgap / (gap * gap));
+}
+
 /// mu(phi) = tau(phi)/phi + integral_0^phi tau(s)/s^2 ds (Pa), the potential whose kernel gradient is the force
 /// (above): the integral tabulated once on a uniform grid of phi in [0, 1] (Simpson's rule on each interval's
 /// 16 sub-intervals), linearly interpolated, tau/phi exact. Relative error of the integral below 1e-6 of mu away
-/// from phi_cp (tests/unit/test_particle_stress.cpp).
+/// from phi_cp (tests/unit/test_particle_stress.cpp). With a finite max_stiffness_Pa: above phi_lim, where tau'
+/// reaches it (bisection), mu(phi) = mu(phi_lim) + (tau'(phi_lim)/phi_lim)(phi - phi_lim) -- the law's stiffness
+/// held at the cap, so that the explicit force stays stable into and beyond close packing.
 class StressPotential {
  public:
   explicit StressPotential(const ParticleStressParams& s, int intervals = 8192);
   double operator()(double phi) const;
   const ParticleStressParams& params() const { return s_; }
+  /// phi_lim of the stiffness cap (1 when there is none, or the law never reaches it below phi_cp).
+  double stiffness_limit_phi() const { return phi_lim_; }
 
  private:
+  double uncapped(double phi) const;
   ParticleStressParams s_;
+  double phi_lim_ = 1.0, mu_lim_ = 0.0, slope_lim_ = 0.0;
   double dphi_ = 0;
   std::vector<double> integral_;  // integral_0^{k dphi} tau(s)/s^2 ds, k = 0 .. intervals
 };

@@ -360,6 +360,9 @@ NumericsConfig read_numerics(const SceneReader& in) {
     if (*v < 1) in.fail_value("numerics", "sort_interval_steps", "must be an integer >= 1");
     nm.sort_interval_steps = *v;
   }
+  if (auto v = in.number("numerics", "particle_stress_courant"))
+    nm.particle_stress_courant = in.in_range("numerics", "particle_stress_courant", *v, 0.0, 1.0, true,
+                                             "; an explicit pressure force held over a fluid step");
   if (auto v = in.integer("numerics", "skin_target_steps")) {
     if (*v < 1) in.fail_value("numerics", "skin_target_steps", "must be an integer >= 1");
     nm.skin_target_steps = *v;

@@ -97,6 +97,7 @@ struct NumericsConfig {
   double drag_safety = 0.5;                // fluid step x beta_max / rho_p <= this (explicit particle drag)
   std::int64_t sort_interval_steps = 1000; // DEM steps between reorderings of the particles by cell
   std::int64_t skin_target_steps = 20;     // adaptive skin (contact.skin_over_dp absent): DEM steps a list lasts
+  double particle_stress_courant = 0.5;    // [particle_stress]: longest fluid step x sqrt(tau'/rho_p) / cell, at most
 };
 
 /// Numbers derived from the scene, printed at start and stored in every output file (/params).

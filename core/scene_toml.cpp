@@ -77,7 +77,9 @@ const std::vector<SectionSpec>& schema() {
         {"viscous_safety", Kind::Number, "fluid step over AB2's explicit-viscosity limit"},
         {"drag_safety", Kind::Number, "largest fluid step x beta_max / rho_p (explicit particle drag)"},
         {"sort_interval_steps", Kind::Integer, "DEM steps between reorderings of the particles by cell"},
-        {"skin_target_steps", Kind::Integer, "adaptive skin: DEM steps a neighbour list lasts"}}},
+        {"skin_target_steps", Kind::Integer, "adaptive skin: DEM steps a neighbour list lasts"},
+        {"particle_stress_courant", Kind::Number,
+         "particle-phase pressure: longest fluid step x its wave speed sqrt(tau'/rho_p) / cell edge, at most"}}},
   };
   return sections;
 }

@@ -53,8 +53,6 @@ CoupledStep::CoupledStep(const Scene& scene, fluid::FluidGrid& grid, double dt_d
   cs.drag_own_deposit = f.drag_own_deposit;
   cs.void_fraction_floor = scene.numerics.void_fraction_floor;
   cs.particle_body_accel = driving.particle_body_accel_m_s2;
-  cs.particle_stress = f.particle_stress;
-  coupler_ = std::make_unique<coupling::Coupler>(cs, grid_);
   pressure_gradient_mean_ = driving.pressure_gradient_mean_Pa_m;
   // Particle drag is explicit over a fluid step (momentum exchange exact, coupler.hpp): keep
   // dt_fluid beta_max / rho_p <= numerics.drag_safety (0.5), beta_max at the densest admissible state
@@ -64,6 +62,16 @@ CoupledStep::CoupledStep(const Scene& scene, fluid::FluidGrid& grid, double dt_d
   // A fluid step is a whole number of DEM steps: a DEM step longer than the fluid's stability
   // limits (explicit viscosity, explicit particle drag) cannot be run; refuse it before writing.
   const double limit = std::min(fluid_->viscous_dt_limit(), dt_fluid_cap_);
+  // The particle-phase pressure's force is explicit over a fluid step too: its waves, of speed sqrt(tau'/rho_p),
+  // may cross at most numerics.particle_stress_courant of a cell in the longest fluid step (`limit`), so tau' is
+  // capped at rho_p (C h_min / limit)^2 (core/particle_stress.hpp; it binds only near close packing)
+  cs.particle_stress = f.particle_stress;
+  if (cs.particle_stress.model != ParticleStressModel::None) {
+    const auto& h = grid_.spacing();
+    const double c = scene.numerics.particle_stress_courant * std::min({h[0], h[1], h[2]}) / limit;
+    cs.particle_stress.max_stiffness_Pa = scene.particles.density_kg_m3 * c * c;
+  }
+  coupler_ = std::make_unique<coupling::Coupler>(cs, grid_);
   if (dt_dem_s_ > limit)
     throw InputError(scene.source_path + ": the DEM time step " + std::to_string(dt_dem_s_) +
                      " s exceeds the fluid's stability limit " + std::to_string(limit) +

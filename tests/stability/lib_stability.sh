@@ -78,7 +78,7 @@ run_ok() {
   echo "ran $name in $((SECONDS - t0)) s: $(grep -m1 'particle count' "$tmp/$name.out" | sed 's/  */ /g')"
 }
 
-# check RUN_DIR [--expect-floored] [--np N]: the checks every stability test makes (see check.py below).
+# check RUN_DIR [--expect-floored] [--stored-energy] [--np N]: the checks every stability test makes (see check.py below).
 cat >"$tmp/check.py" <<'PYEOF'
 """Checks of a completed coupled run (tests/stability): prints the figures, exits 1 on a failure.
 
@@ -98,7 +98,10 @@ cat >"$tmp/check.py" <<'PYEOF'
   1 - <phi_p> to 1e-9 (the floor is conservative), pressure and fluid velocity finite;
 * the fluid's continuity residual (relative) <= 1e-6 on every row;
 * particle overlaps measured from the snapshot positions below the engine's blow-up limit (25 % of d);
-* with --expect-floored: floored_cells > 0 on some row and cells at the floor in some snapshot.
+* with --expect-floored: floored_cells > 0 on some row and cells at the floor in some snapshot;
+* with --stored-energy: the run starts with energy the bound above does not count (a particle-phase pressure's
+  sum_c V_c psi(phi_c), core/particle_stress.hpp, in a packing past close packing), so the energy bound is not
+  checked; the caps on the slip and the rms speed, and every other check, are.
 """
 import glob, math, os, sys
 import h5py
@@ -108,6 +111,7 @@ def main():
     args = sys.argv[1:]
     run = args[0]
     expect_floored = "--expect-floored" in args
+    stored_energy = "--stored-energy" in args
     fails = []
     def need(ok, what):
         if not ok:
@@ -144,7 +148,7 @@ def main():
     M = float(p["particle_count"]) * float(p["parcel_mass_kg"])
     bound = 1.05 * (E[0] + np.maximum(E_in, 0.0)) + 1e-9 * 0.5 * M * u_t**2
     worst = int(np.argmax(E / bound))
-    need(np.all(E <= bound), f"energy above the bound at t = {t[worst]:.4g} s: E = {E[worst]:.4g} J > {bound[worst]:.4g} J")
+    need(stored_energy or np.all(E <= bound), f"energy above the bound at t = {t[worst]:.4g} s: E = {E[worst]:.4g} J > {bound[worst]:.4g} J")
     need(np.all(np.abs(slip[:, 1]) <= 5 * u_t), f"|u_slip,y| above 5 u_t: max {np.abs(slip[:, 1]).max() / u_t:.3g} u_t")
     v_rms = np.sqrt(2 * s["kinetic_energy"][:] / M)
     v0 = float(p["velocity_rms_m_s"])

@@ -76,6 +76,25 @@ TEST(ParticleStress, PotentialMatchesItsClosedFormAndDerivative) {
   }
 }
 
+TEST(ParticleStress, StiffnessCapHoldsTauPrimeBeyondItsPhi) {
+  // tau' by hand (beta = 3): P_s (3 phi^2 / (phi_cp - phi) + phi^3 / (phi_cp - phi)^2)
+  ParticleStressParams s = hc(30.0, 3.0);
+  EXPECT_NEAR(cgd::harris_crighton_stiffness(s, 0.3), 30.0 * (3 * 0.09 / 0.3 + 0.027 / 0.09), 1e-12);
+  const cgd::StressPotential free(s);
+  EXPECT_EQ(free.stiffness_limit_phi(), 1.0);
+  s.max_stiffness_Pa = 5000.0;
+  const cgd::StressPotential capped(s);
+  const double lim = capped.stiffness_limit_phi();
+  ASSERT_GT(lim, 0.3);
+  ASSERT_LT(lim, 0.6);
+  EXPECT_NEAR(cgd::harris_crighton_stiffness(s, lim), 5000.0, 1e-6 * 5000.0);
+  // below phi_lim the law itself; above, mu continues with slope tau'(phi_lim)/phi_lim, continuous at phi_lim
+  EXPECT_EQ(capped(0.9 * lim), free(0.9 * lim));
+  EXPECT_NEAR(capped(lim + 1e-9), free(lim), 1e-6 * free(lim));
+  for (double phi : {lim + 0.01, 0.6, 0.7})
+    EXPECT_NEAR(capped(phi), free(lim) + 5000.0 / lim * (phi - lim), 1e-6 * capped(phi)) << phi;
+}
+
 /// A coupler on a periodic grid of `cells` cells of edge h = 10 d_p, one rank, Beetstra drag, fluid at rest, and
 /// parcels of alpha^3 = `factor` primaries (so that a few particles per cell reach a dense phi).
 struct Bench {
