@@ -53,6 +53,10 @@ Per run (means over the window's snapshots; slips over u_t):
                               carries if it builds the same cells);
                   residual    rest - sub-grid - grid-scale: contacts minus the cells' momentum change in time
                               (the one term a snapshot cannot give: ~0 for a bin whose cells keep their momentum).
+                sub-grid pressure  the isotropic part of R_c in Pa, (R_xx + R_yy + R_zz)/3, averaged over the bin's
+                              particles: the filtered particle pressure a coarse closure would supply (its rise
+                              with phi is what resists compaction; docs/closure.md "A particle-phase pressure
+                              against the plug").
                 A particle's Lagrangian acceleration over a cell is the Eulerian change plus the divergence of both
                 fluxes, so rest = contacts + sub-grid + grid-scale - unsteady. The hypothesis it tests: the
                 resolved run's dense cells are loaded by momentum carried into them at sub-grid scale (a
@@ -178,6 +182,7 @@ def snapshot_cells(path, n_cells, from_tref):
     return dict(flat=flat, grid=grid, solids=solids, momentum=momentum, e=e_c, eu=eu_c, cell_volume=cell_volume,
                 drag_share=beta * (u_p - v[:, 1]) / weight, pressure_share=-dpdy / weight,
                 subgrid_share=flux["subgrid"][flat], grid_share=flux["grid"][flat],
+                subgrid_pressure=subgrid_pressure(flat, v, vol, grid, hs, consts["rho_p"])[flat],
                 n=n, v_y=v[:, 1], v_mean=float(v[:, 1].mean()), dpdy_mean=float(dpdy.mean()),
                 u_domain=float(eu.sum() / eps.sum()), phi_mean=n * vol / float(np.prod(box)),
                 fine_volume=fine_volume, **consts)
@@ -216,6 +221,21 @@ def particle_flux_shares(flat, v, vol, grid, hs, rho_p, g):
             for name, t in (("subgrid", subgrid), ("grid", gridscale))}
 
 
+def subgrid_pressure(flat, v, vol, grid, hs, rho_p):
+    """Per coarse cell: the isotropic part of the particles' sub-grid kinetic stress, (R_xx + R_yy + R_zz)/3 with
+    R_jj = rho_p (sum_i V_i v_i,j^2 - P_c,j^2 / M_c) / V_c, Pa (0 in an empty cell)."""
+    ncell = grid[0] * grid[1] * grid[2]
+    m = np.bincount(flat, minlength=ncell) * vol
+    occupied = m > 0
+    safe = np.where(occupied, m, 1.0)
+    total = np.zeros(ncell)
+    for j in range(3):
+        p = np.bincount(flat, weights=v[:, j], minlength=ncell) * vol
+        q = np.bincount(flat, weights=v[:, j] ** 2, minlength=ncell) * vol
+        total += np.where(occupied, q - p * p / safe, 0.0)
+    return rho_p * total / (3.0 * float(np.prod(hs)))
+
+
 def cell_velocities(snap):
     """u_c (the fluid's Favre velocity) and v_c (the particles' volume-weighted mean velocity, 0 in an empty cell),
     y components, per coarse cell of a snapshot_cells result."""
@@ -234,6 +254,7 @@ def run_snapshots(run):
 def analyse(runs, n_cells, from_tref, bin_width):
     """Pooled figures of one or more runs (their window's snapshots)."""
     phi_all, slip_all, drag_all, pressure_all, subgrid_all, grid_all, rows = [], [], [], [], [], [], []
+    stress_all = []
     for run in runs:
         used = 0
         for path in run_snapshots(run):
@@ -253,6 +274,7 @@ def analyse(runs, n_cells, from_tref, bin_width):
             pressure_all.append(snap["pressure_share"])
             subgrid_all.append(snap["subgrid_share"])
             grid_all.append(snap["grid_share"])
+            stress_all.append(snap["subgrid_pressure"])
             domain = (snap["u_domain"] - snap["v_mean"]) / snap["u_t"]
             local = float(np.sum(weight * slip_c))
             weight_mix = (snap["rho_p"] * snap["phi_mean"] + snap["rho_f"] * (1 - snap["phi_mean"])) * snap["g"]
@@ -266,6 +288,7 @@ def analyse(runs, n_cells, from_tref, bin_width):
     pressure_p = np.concatenate(pressure_all)
     subgrid_p = np.concatenate(subgrid_all)
     grid_p = np.concatenate(grid_all)
+    stress_p = np.concatenate(stress_all)
     phi_mean = rows[0]["phi_mean"]
     mean = lambda k: float(np.mean([r[k] for r in rows]))  # noqa: E731
     stderr = lambda k: float(np.std([r[k] for r in rows], ddof=1) / math.sqrt(len(rows))) if len(rows) > 1 else math.nan  # noqa: E731
@@ -279,7 +302,8 @@ def analyse(runs, n_cells, from_tref, bin_width):
                          drag=float(drag_p[sel].mean()) if sel.any() else math.nan,
                          pressure=float(pressure_p[sel].mean()) if sel.any() else math.nan,
                          subgrid=float(subgrid_p[sel].mean()) if sel.any() else math.nan,
-                         grid=float(grid_p[sel].mean()) if sel.any() else math.nan))
+                         grid=float(grid_p[sel].mean()) if sel.any() else math.nan,
+                         stress=float(stress_p[sel].mean()) if sel.any() else math.nan))
     return dict(snapshots=len(rows), phi=phi_mean, domain=mean("domain"), domain_err=stderr("domain"),
                 local=mean("local"), drift=mean("drift"), drift_err=stderr("drift"), support=mean("support"),
                 phi_pw=float(phi_p.mean()), phi_std=float(phi_p.std()), phi_p99=float(np.percentile(phi_p, 99)),
@@ -335,6 +359,9 @@ def tables(results, n_cells, from_tref, coarse_from_tref=None):
             "particles' velocity fluctuations in their cell) / grid-scale (the cells' mean motion) / residual (rest - "
             "both: contacts minus the cells' momentum change)", ""]
     out += bin_table(results, fluxes, first=("all", results))
+    out += ["", "Sub-grid particle pressure per phi bin, Pa: the isotropic part of the particles' velocity-fluctuation "
+            "stress in their cell, averaged over the bin's particles", ""]
+    out += bin_table(results, lambda bn: f"{bn['stress']:.3f}")
     return "\n".join(out)
 
 

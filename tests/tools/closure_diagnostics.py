@@ -136,6 +136,13 @@ with tempfile.TemporaryDirectory() as tmp:
           abs(c1["grid"] + 0.0875) < 1e-12,
           f"momentum flux per bin: 0.1 / 0.4 at phi 0.01, 0 / -0.0875 at 0.02 ({c0['subgrid']}, {c0['grid']}, "
           f"{c1['subgrid']}, {c1['grid']})")
+    # sub-grid pressure: cell 0 (v_y 1 and 3) R_yy = 1000 (0.1 - 0.04^2/0.02) = 20 Pa, cell 3 (v = (1, 0), (-1, 2))
+    # R_xx = R_yy = 20 Pa, a lone particle 0: isotropic parts 20/3, 0 and 40/3; per bin (particle-weighted) 0 at
+    # phi 0.01 and (2 x 20/3 + 2 x 40/3)/4 = 10 at 0.02
+    check(np.allclose(snap["subgrid_pressure"], [20 / 3, 20 / 3, 0.0, 40 / 3, 40 / 3], rtol=0, atol=1e-9) and
+          abs(c0["stress"]) < 1e-12 and abs(c1["stress"] - 10.0) < 1e-9,
+          f"sub-grid pressure 6.67, 0, 13.3 Pa per cell, 0 and 10 Pa per bin ({snap['subgrid_pressure'].tolist()}, "
+          f"{c0['stress']}, {c1['stress']})")
     check(abs(r["subgrid"]) < 1e-12 and abs(r["grid"]) < 1e-12,
           f"two cells across: no flux derivative ({r['subgrid']}, {r['grid']})")
     w = cd.overlap_matrix(3, 2.0 / 3.0, 0.0, 2, 1.0)
