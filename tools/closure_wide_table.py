@@ -42,9 +42,15 @@ def attr(path, key):
 
 
 def closure_label(c):
+    """LABELS's label, g<G> and r<r> spelled out; any other name (a closure of some other script: model4,
+    perfectc8, ...) as it is."""
     if c in LABELS:
         return LABELS[c]
-    return f"perfect table of the {c[1:]}-cell grid" if c[0] == "g" else f"model, r = {c[1:]}"
+    if re.fullmatch(r"g[0-9.]+", c):
+        return f"perfect table of the {c[1:]}-cell grid"
+    if re.fullmatch(r"r[0-9.]+", c):
+        return f"model, r = {c[1:]}"
+    return c
 
 
 def closure_order(c):

@@ -32,6 +32,7 @@ with tempfile.TemporaryDirectory() as d:
         summary(os.path.join(d, f"phi0.05_a3_g4_s{seed}", "summary.h5"), slip, 0.005)
     summary(os.path.join(d, "phi0.05_a3_r2_s1", "summary.h5"), 1.05, 0.02)
     summary(os.path.join(d, "phi0.05_a3_driftheld_s1", "summary.h5"), 0.97, 0.01)
+    summary(os.path.join(d, "phi0.05_a3_model4_s1", "summary.h5"), 0.95, 0.01)  # another script's closure name
     summary(os.path.join(d, "phi0.10_a3_g4_s1", "summary.h5"), 0.5, 0.01)  # no reference: ignored
     summary(os.path.join(d, "other_run", "summary.h5"), 0.5, 0.01)  # not the pattern: ignored
     p = subprocess.run([sys.executable, tool, d], capture_output=True, text=True)
@@ -46,6 +47,7 @@ with tempfile.TemporaryDirectory() as d:
     check("| drift table, held out | 3.0 % | -3.0 % | 1 |" in out, "rms and worst of the named closure")
     check(out.index("drift table, held out") < out.index("perfect table of the 4-cell grid"),
           "named closures are listed first")
+    check("| 0.05 | 1.000 | model4 | 3 | -5.0 ± 1.0 % | 1 |" in out, "a name the tool does not know: itself")
     check("0.10" not in out, "a phi without a reference is left out")
     png = os.path.join(d, "figure.png")
     p = subprocess.run([sys.executable, tool, d, "--plot", png], capture_output=True, text=True)
