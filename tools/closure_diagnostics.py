@@ -182,7 +182,7 @@ def snapshot_cells(path, n_cells, from_tref):
     return dict(flat=flat, grid=grid, solids=solids, momentum=momentum, e=e_c, eu=eu_c, cell_volume=cell_volume,
                 drag_share=beta * (u_p - v[:, 1]) / weight, pressure_share=-dpdy / weight,
                 subgrid_share=flux["subgrid"][flat], grid_share=flux["grid"][flat],
-                subgrid_pressure=subgrid_pressure(flat, v, vol, grid, hs, consts["rho_p"])[flat],
+                subgrid_pressure=flux["pressure"][flat],
                 n=n, v_y=v[:, 1], v_mean=float(v[:, 1].mean()), dpdy_mean=float(dpdy.mean()),
                 u_domain=float(eu.sum() / eps.sum()), phi_mean=n * vol / float(np.prod(box)),
                 fine_volume=fine_volume, **consts)
@@ -205,7 +205,9 @@ def divergence_y(t, grid, hs):
 def particle_flux_shares(flat, v, vol, grid, hs, rho_p, g):
     """Per coarse cell: the y force of the particle phase's sub-grid and grid-scale momentum fluxes (minus the y
     row of their divergence) times the cell volume, over the weight rho_p g M_c of the cell's particles (0 in an
-    empty cell); see "momentum flux" in the module's doc."""
+    empty cell), as "subgrid" and "grid"; see "momentum flux" in the module's doc. And "pressure": the isotropic
+    part of the sub-grid stress, (R_xx + R_yy + R_zz)/3 with R_jj = rho_p (sum_i V_i v_i,j^2 - P_c,j^2 / M_c) / V_c,
+    Pa (0 in an empty cell)."""
     ncell = grid[0] * grid[1] * grid[2]
     cell_volume = float(np.prod(hs))
     m = np.bincount(flat, minlength=ncell) * vol
@@ -217,23 +219,13 @@ def particle_flux_shares(flat, v, vol, grid, hs, rho_p, g):
     subgrid = [rho_p * (q[j] - resolved[j]) / cell_volume for j in range(3)]
     gridscale = [rho_p * resolved[j] / cell_volume for j in range(3)]
     weight = rho_p * g * safe
-    return {name: np.where(occupied, -divergence_y(t, grid, hs) * cell_volume / weight, 0.0)
-            for name, t in (("subgrid", subgrid), ("grid", gridscale))}
-
-
-def subgrid_pressure(flat, v, vol, grid, hs, rho_p):
-    """Per coarse cell: the isotropic part of the particles' sub-grid kinetic stress, (R_xx + R_yy + R_zz)/3 with
-    R_jj = rho_p (sum_i V_i v_i,j^2 - P_c,j^2 / M_c) / V_c, Pa (0 in an empty cell)."""
-    ncell = grid[0] * grid[1] * grid[2]
-    m = np.bincount(flat, minlength=ncell) * vol
-    occupied = m > 0
-    safe = np.where(occupied, m, 1.0)
-    total = np.zeros(ncell)
-    for j in range(3):
-        p = np.bincount(flat, weights=v[:, j], minlength=ncell) * vol
-        q = np.bincount(flat, weights=v[:, j] ** 2, minlength=ncell) * vol
-        total += np.where(occupied, q - p * p / safe, 0.0)
-    return rho_p * total / (3.0 * float(np.prod(hs)))
+    shares = {name: np.where(occupied, -divergence_y(t, grid, hs) * cell_volume / weight, 0.0)
+              for name, t in (("subgrid", subgrid), ("grid", gridscale))}
+    # R_yy is subgrid[1]; R_xx and R_zz need the squares of v_x and v_z
+    r_xx, r_zz = (rho_p * (np.bincount(flat, weights=v[:, j] ** 2, minlength=ncell) * vol -
+                           np.where(occupied, p[j] * p[j] / safe, 0.0)) / cell_volume for j in (0, 2))
+    shares["pressure"] = (r_xx + subgrid[1] + r_zz) / 3.0
+    return shares
 
 
 def cell_velocities(snap):
