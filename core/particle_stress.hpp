@@ -45,20 +45,27 @@ struct ParticleStressParams {
   double max_stiffness_Pa = std::numeric_limits<double>::infinity();
 };
 
+/// The Harris-Crighton denominator max(phi_cp - phi, eps (1 - phi)) and its derivative in phi.
+struct HarrisCrightonGap {
+  double value, derivative;
+};
+inline HarrisCrightonGap harris_crighton_gap(const ParticleStressParams& s, double phi) {
+  const double open = s.phi_packed - phi, floor = s.epsilon * (1.0 - phi);
+  return open < floor ? HarrisCrightonGap{floor, -s.epsilon} : HarrisCrightonGap{open, -1.0};
+}
+
 /// tau(phi) of the Harris-Crighton form above, Pa (0 for phi <= 0).
 inline double harris_crighton_stress(const ParticleStressParams& s, double phi) {
   if (!(phi > 0.0)) return 0.0;
-  const double gap = std::max(s.phi_packed - phi, s.epsilon * (1.0 - phi));
-  return s.p_s_Pa * std::pow(phi, s.beta) / gap;
+  return s.p_s_Pa * std::pow(phi, s.beta) / harris_crighton_gap(s, phi).value;
 }
 
 /// tau'(phi) of the Harris-Crighton form, Pa (0 for phi <= 0).
 inline double harris_crighton_stiffness(const ParticleStressParams& s, double phi) {
   if (!(phi > 0.0)) return 0.0;
-  const bool packed = s.phi_packed - phi < s.epsilon * (1.0 - phi);
-  const double gap = packed ? s.epsilon * (1.0 - phi) : s.phi_packed - phi;
-  const double dgap = packed ? -s.epsilon : -1.0;
-  return s.p_s_Pa * (s.beta * std::pow(phi, s.beta - 1.0) / gap - std::pow(phi, s.beta) * dgap / (gap * gap));
+  const HarrisCrightonGap gap = harris_crighton_gap(s, phi);
+  return s.p_s_Pa * (s.beta * std::pow(phi, s.beta - 1.0) / gap.value -
+                     std::pow(phi, s.beta) * gap.derivative / (gap.value * gap.value));
 }
 
 /// mu(phi) = tau(phi)/phi + integral_0^phi tau(s)/s^2 ds (Pa), the potential whose kernel gradient is the force

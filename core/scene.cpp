@@ -180,13 +180,13 @@ ParticleStressParams read_particle_stress(const SceneReader& in, const ToolAccep
                   "needs a solved fluid (fluid.coupling = \"two-way\" or \"one-way\"): the pressure's gradient is "
                   "taken on the fluid grid's cells, and a quiescent fluid has no grid");
   if (auto v = in.number("particle_stress", "p_s")) p.p_s_Pa = in.positive("particle_stress", "p_s", *v);
-  if (auto v = in.number("particle_stress", "beta"))
+  if (auto v = in.number("particle_stress", "beta")) {
     if (!(*v >= 2.0 && *v <= 10.0))
       in.fail_value("particle_stress", "beta",
                     "must be in [2, 10] (Snider 2001 uses 2 to 5; below 2 the potential of the discrete force, "
                     "integral_0^phi tau(s)/s^2 ds, diverges at phi = 0: core/particle_stress.hpp)");
-    else
-      p.beta = *v;
+    p.beta = *v;
+  }
   if (auto v = in.number("particle_stress", "phi_packed"))
     p.phi_packed = in.in_range("particle_stress", "phi_packed", *v, 0.0, 1.0, false);
   if (auto v = in.number("particle_stress", "epsilon"))

@@ -45,37 +45,16 @@ void Coupler::particle_stress_accelerations(std::size_t n) {
       }
   exchange_interleaved_ghosts(g.comm(), view_, stress_mu_.data(), 1);
   const double* m = stress_mu_.data();
-  const auto& h = g.spacing();
   const double v_over_m = s_.particle_volume_m3 / s_.particle_mass_kg * s_.parcel_volume_factor;  // 1/rho_p
   pc_.stress_accel.assign(3 * n, 0.0);
   double sum[4] = {0.0, 0.0, 0.0, static_cast<double>(n)};
   for (std::size_t i = 0; i < n; ++i) {
-    // grad w_pc of the TSC weights: d/dx of w(d) along one axis (stencil_weights' derivatives, d = s - c - 1/2,
-    // ds/dx = 1/h) times the other two axes' weights
-    const Stencil& st = stencil_[i];
-    double w[3][3], dw[3][3];
-    for (int a = 0; a < 3; ++a) {
-      stencil_weights(st.d[a], w[a]);
-      dw[a][0] = -(0.5 - st.d[a]) / h[a];
-      dw[a][1] = -2.0 * st.d[a] / h[a];
-      dw[a][2] = (0.5 + st.d[a]) / h[a];
-    }
-    int ix[3], iz[3];
-    for (int a = 0; a < 3; ++a) {
-      ix[a] = wrap_index(st.first[0] + a, view_.cells[0]);
-      iz[a] = wrap_index(st.first[2] + a, view_.cells[2]);
-    }
     double grad[3] = {0.0, 0.0, 0.0};
-    for (int c = 0; c < 3; ++c)
-      for (int b = 0; b < 3; ++b) {
-        const std::size_t row = view_.index(0, st.first[1] + b, iz[c]);
-        for (int a = 0; a < 3; ++a) {
-          const double mc = m[row + static_cast<std::size_t>(ix[a])];
-          grad[0] += mc * dw[0][a] * w[1][b] * w[2][c];
-          grad[1] += mc * w[0][a] * dw[1][b] * w[2][c];
-          grad[2] += mc * w[0][a] * w[1][b] * dw[2][c];
-        }
-      }
+    for_each_stencil_cell_gradient(view_, stencil_[i], [&](std::size_t c, double gx, double gy, double gz) {
+      grad[0] += m[c] * gx;
+      grad[1] += m[c] * gy;
+      grad[2] += m[c] * gz;
+    });
     for (int d = 0; d < 3; ++d) {
       pc_.stress_accel[3 * i + d] = -v_over_m * grad[d];
       sum[d] += pc_.stress_accel[3 * i + d];

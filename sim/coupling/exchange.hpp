@@ -105,6 +105,33 @@ inline void for_each_stencil_cell(const GridView& g, const Stencil& st, F&& f) {
     }
 }
 
+/// The gradient of the kernel at the particle, grad w_pc, for the cells of for_each_stencil_cell in the same order:
+/// f(storage index, gx, gy, gz). Along each axis dw/dx of stencil_weights' three weights (d = s - c - 1/2,
+/// ds/dx = 1/h): -(1/2 - d)/h, -2d/h, (1/2 + d)/h, times the other two axes' weights (the particle-phase pressure,
+/// coupler.hpp).
+template <class F>
+inline void for_each_stencil_cell_gradient(const GridView& g, const Stencil& st, F&& f) {
+  double w[3][3], dw[3][3];
+  for (int a = 0; a < 3; ++a) {
+    stencil_weights(st.d[a], w[a]);
+    dw[a][0] = -(0.5 - st.d[a]) / g.spacing[a];
+    dw[a][1] = -2.0 * st.d[a] / g.spacing[a];
+    dw[a][2] = (0.5 + st.d[a]) / g.spacing[a];
+  }
+  int ix[3], iz[3];
+  for (int a = 0; a < 3; ++a) {
+    ix[a] = wrap_index(st.first[0] + a, g.cells[0]);
+    iz[a] = wrap_index(st.first[2] + a, g.cells[2]);
+  }
+  for (int c = 0; c < 3; ++c)
+    for (int b = 0; b < 3; ++b) {
+      const std::size_t row = g.index(0, st.first[1] + b, iz[c]);
+      for (int a = 0; a < 3; ++a)
+        f(row + static_cast<std::size_t>(ix[a]), dw[0][a] * w[1][b] * w[2][c], w[0][a] * dw[1][b] * w[2][c],
+          w[0][a] * w[1][b] * dw[2][c]);
+    }
+}
+
 /// Fill the ghost planes of a field of `k` values per cell (interleaved, cell-major) from the
 /// neighbouring slabs (periodic in y). Collective.
 void exchange_interleaved_ghosts(MPI_Comm comm, const GridView& g, double* field, int k);
