@@ -54,7 +54,8 @@ def main():
                                           ("model", "b", "fitted model", dict()), *raw,
                                           ("radl2014", "g", "Radl 2014", dict(marker="v")),
                                           ("perfect", "m", "perfect closure", dict(marker="*", ms=9)),
-                                          ("drift", "c", "drift closure", dict(marker="D"))):
+                                          ("drift", "c", "drift closure", dict(marker="D")),
+                                          ("wide", "tab:orange", "perfect table of a grid twice as wide", dict(marker="P"))):
             pts = sorted([r for r in candidates if r["kind"] == "coarse" and r["drag"] == name], key=lambda r: r[x])
             for r in pts:
                 print(f"{r['phi']:5.2f} {r[x]:{x_format}} {name:>9} {r['R']:2.0f} {r['slip']:7.3f} +- {r['slip_se']:5.3f} "

@@ -24,7 +24,7 @@ import sys
 import h5py
 import numpy as np
 
-LABEL_RE = re.compile(r"_(micro|model|modelraw|radl2014|perfect|drift)_s(\d+)$")
+LABEL_RE = re.compile(r"_(micro|model|modelraw|radl2014|perfect|drift|wide)_s(\d+)$")
 PARCEL_FIT_LABELS = ("modelraw", "model-raw")  # the parcel fit's own runs: listed, never compared
 BOOTSTRAP_QUANTILES = (0.16, 0.84)  # a 68 % interval: the 1-sigma band of a normal distribution
 
@@ -95,7 +95,7 @@ def pareto(items, key):
     return front
 
 
-MARKERS = {"micro": "o", "model": "^", "modelraw": "x", "radl2014": "v", "perfect": "*", "drift": "D"}
+MARKERS = {"micro": "o", "model": "^", "modelraw": "x", "radl2014": "v", "perfect": "*", "drift": "D", "wide": "P"}
 
 
 def draw(configs, agg, ref_costs, plt):

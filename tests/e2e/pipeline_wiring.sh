@@ -41,6 +41,16 @@ grep -q -- "cgd-fit $tmp/out/filter/filtered.h5 --drift-table 4 --force -o $tmp/
   grep -q "phi0.05_c4_a2_drift_s2 .*--set fluid.drag=drift --set fluid.drag_model=$tmp/out/fit/drift_c4.h5 " <<<"$nd" &&
   ! grep -q -- "--model $tmp/out/fit/drift_c4.h5" <<<"$nd" &&
   ok "half: drift runs with their grid's drift table as fluid.drag_model (cgd-fit --drift-table)" || fail "half: drift command"
+nw=$(mk PROFILE=half COARSE_DRAGS=wide COARSE_CELLS=8 PARCEL_FIT=0 ALPHA1_PHIS= coarse)
+grep -q -- "cgd-fit $tmp/out/filter/filtered.h5 --grid-table 4 --force -o $tmp/out/fit/perfect_c4.h5" <<<"$nw" &&
+  grep -q "phi0.05_c8_a3_wide_s2 .*--set fluid.dx_over_dp=6.625 .*--model $tmp/out/fit/perfect_c4.h5  --set fluid.parcel_correction=false" <<<"$nw" &&
+  ! grep -q "perfect_c8.h5" <<<"$nw" &&
+  ok "half: wide runs on the 8-cell grid with the 4-cell grid's table, c_corr off" || fail "half: wide command"
+nw=$(mk PROFILE=half COARSE_DRAGS=wide COARSE_CELLS=8,4 PARCEL_FIT=0 coarse)
+grep -q "COARSE_DRAGS has wide: .*FILTER_GRIDS=12,8,6,5,4,3 lacks 2 (for 4)" <<<"$nw" &&
+  ok "half: wide on the 4-cell grid refused: the filter has no 2-cell grid" || fail "half: wide without its grid: $nw"
+nw=$(mk PROFILE=half COARSE_DRAGS=wide COARSE_CELLS=5 PARCEL_FIT=0 coarse)
+grep -q "COARSE_DRAGS has wide: .*has the odd 5" <<<"$nw" && ok "half: wide on an odd grid refused" || fail "half: wide on an odd grid: $nw"
 grep -q "pipeline_reuse.py --identity $tmp/out/fit/model_parcels.h5; then .*--link $tmp/out/coarse/phi0.05_c4_a3_modelraw_s3 $tmp/out/coarse/phi0.05_c4_a3_model_s3 " <<<"$n" &&
   ok "half: model alpha > 1 runs reuse their modelraw twins when c_corr = 1" || fail "half: no reuse of the modelraw twin"
 grep -q "coarse/phi0.10_c4_a3_model_s1 .*--model $tmp/out/fit/model_parcels.h5" <<<"$n" &&
@@ -83,7 +93,7 @@ ok "make help lists SEEDS, ALPHA1_SEEDS, EXTRA_RESOLVED, FILTER_GRIDS, PARCEL_FI
 
 # ---- refusals: make errors naming what is allowed ----
 e=$(mk PROFILE=demo COARSE_DRAGS=micro,wen-yu all); s=$?
-[ $s -ne 0 ] && grep -q "'wen-yu' is not a drag label (allowed: micro model modelraw radl2014 perfect drift)" <<<"$e" &&
+[ $s -ne 0 ] && grep -q "'wen-yu' is not a drag label (allowed: micro model modelraw radl2014 perfect drift wide)" <<<"$e" &&
   ok "an unknown drag label is a make error listing the allowed ones" || fail "unknown drag label: status $s, $e"
 e=$(mk PROFILE=half EXTRA_RESOLVED=0.07_s2 all); s=$?
 [ $s -ne 0 ] && grep -q "EXTRA_RESOLVED entry '0.07_s2'" <<<"$e" && ok "EXTRA_RESOLVED outside PHIS refused" || fail "EXTRA_RESOLVED=0.07_s2: $s"
