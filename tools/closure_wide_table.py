@@ -7,8 +7,10 @@ usage: tools/closure_wide_table.py DIR [--plot PNG]
 
 DIR holds resolved_phi<phi>.h5 (cgd-coarse --summarise of each resolved run over its sampling window) and the coarse
 runs phi<phi>_a<alpha>_<closure>_s<seed>/summary.h5, <closure> = g<G> (the perfect table of the grid of G cells
-across), r<r> (the fitted model at fluid.filter_to_grid_ratio = r) or one of the names of LABELS (the drift
-experiment's closures and scripts/figure3_box.sh's). Prints a markdown table: per phi, closure and
+across), r<r> (the fitted model at fluid.filter_to_grid_ratio = r), one of the names of LABELS (the drift
+experiment's closures and scripts/figure3_box.sh's), or one of those at another filter: <name>r<r> (evaluated at
+Delta = r cells, e.g. radlr2) or <table|drift><held|own><G> (the table of the grid of G cells across, e.g.
+tableheld4, as CELLS=8 TABLE_CELLS=4 scripts/closure_drift.sh uses it). Prints a markdown table: per phi, closure and
 alpha, the relative error of the slip against the resolved run, mean over the seeds +- the standard error of that
 mean (the seeds' scatter / sqrt(n); one seed: the run's own batch-means error), and the seeds' count; then per
 closure the rms and the worst of the means over every phi and alpha.
@@ -41,11 +43,30 @@ def attr(path, key):
         return float(f.attrs[key])
 
 
+# a named closure of LABELS at another filter: <name>r<r> (a law evaluated at Delta = r cells, e.g. radlr2) and
+# <table or drift><held or own><G> (the table of the grid of G cells across used on the run's grid, e.g. tableheld4)
+AT_RATIO = re.compile(r"^(?P<base>[a-z]+?)r(?P<n>[0-9.]+)$")
+OF_GRID = re.compile(r"^(?P<base>(?:table|drift)(?:held|own))(?P<n>[0-9]+)$")
+
+
+def named_variant(c):
+    """(base name, kind 'r' or 'g', number) of a LABELS closure at another filter, or None."""
+    for kind, pattern in (("g", OF_GRID), ("r", AT_RATIO)):
+        m = pattern.match(c)
+        if m and m["base"] in LABELS:
+            return m["base"], kind, float(m["n"])
+    return None
+
+
 def closure_label(c):
-    """LABELS's label, g<G> and r<r> spelled out; any other name (a closure of some other script: model4,
-    perfectc8, ...) as it is."""
+    """LABELS's label, g<G> and r<r> spelled out, a LABELS closure at another filter (radlr2, tableheld4) as its
+    label with the filter; any other name (a closure of some other script: model4, perfectc8, ...) as it is."""
     if c in LABELS:
         return LABELS[c]
+    v = named_variant(c)
+    if v:
+        base, kind, n = v
+        return f"{LABELS[base]}, the {n:g}-cell grid's table" if kind == "g" else f"{LABELS[base]} at Δ = {n:g} cells"
     if re.fullmatch(r"g[0-9.]+", c):
         return f"perfect table of the {c[1:]}-cell grid"
     if re.fullmatch(r"r[0-9.]+", c):
@@ -57,6 +78,9 @@ def closure_order(c):
     """The named closures first in LABELS's order, then g<G> and r<r> by kind and number."""
     if c in LABELS:
         return (0, list(LABELS).index(c), 0.0)
+    v = named_variant(c)
+    if v:
+        return (0, list(LABELS).index(v[0]), v[2])
     if re.fullmatch(r"[gr][0-9.]+", c):
         return (1 if c[0] == "g" else 2, 0, float(c[1:]))
     return (3, 0, 0.0)

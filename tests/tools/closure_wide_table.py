@@ -33,6 +33,8 @@ with tempfile.TemporaryDirectory() as d:
     summary(os.path.join(d, "phi0.05_a3_r2_s1", "summary.h5"), 1.05, 0.02)
     summary(os.path.join(d, "phi0.05_a3_driftheld_s1", "summary.h5"), 0.97, 0.01)
     summary(os.path.join(d, "phi0.05_a3_model4_s1", "summary.h5"), 0.95, 0.01)  # another script's closure name
+    summary(os.path.join(d, "phi0.05_a3_radlr2_s1", "summary.h5"), 1.02, 0.01)  # radl2014 at Delta = 2 cells
+    summary(os.path.join(d, "phi0.05_a3_tableheld4_s1", "summary.h5"), 0.99, 0.01)  # the 4-cell grid's table
     summary(os.path.join(d, "phi0.10_a3_g4_s1", "summary.h5"), 0.5, 0.01)  # no reference: ignored
     summary(os.path.join(d, "other_run", "summary.h5"), 0.5, 0.01)  # not the pattern: ignored
     p = subprocess.run([sys.executable, tool, d], capture_output=True, text=True)
@@ -48,6 +50,11 @@ with tempfile.TemporaryDirectory() as d:
     check(out.index("drift table, held out") < out.index("perfect table of the 4-cell grid"),
           "named closures are listed first")
     check("| 0.05 | 1.000 | model4 | 3 | -5.0 ± 1.0 % | 1 |" in out, "a name the tool does not know: itself")
+    check("| 0.05 | 1.000 | radl2014 at Δ = 2 cells | 3 | +2.0 ± 1.0 % | 1 |" in out, "radlr2: radl2014 at Delta = 2 cells")
+    check("| 0.05 | 1.000 | phi-bar table, held out, the 4-cell grid's table | 3 | -1.0 ± 1.0 % | 1 |" in out,
+          "tableheld4: the held-out table of the 4-cell grid")
+    check(out.index("phi-bar table, held out, the 4-cell") < out.index("radl2014 at") < out.index("perfect table of the 4-cell"),
+          "a named closure at another filter is listed beside its base")
     check("0.10" not in out, "a phi without a reference is left out")
     png = os.path.join(d, "figure.png")
     p = subprocess.run([sys.executable, tool, d, "--plot", png], capture_output=True, text=True)
