@@ -8,25 +8,28 @@ snapshots are read, checked and deposited by tools/closure_diagnostics.py (`run_
 grid of N cells across, particles or parcels -- alpha^3 particle volumes -- to the cell of their centre), so a resolved
 run and a coarse run are seen on the same grid the same way, and a damaged snapshot is refused the same way.
 
-usage: /usr/bin/python3 tools/layer_profile.py RUN_DIR... [--cells N] [--from-tref 40] [--markdown]
+usage: /usr/bin/python3 tools/layer_profile.py RUN_DIR... [--cells N] [--from-tref 40] [--markdown] [--history]
 Prints per run: snapshots used, the mean over them of the densest layer's phi and of the lateral spread, the
-densest cell, and the last snapshot's layer profile. Exit status 0; 2 for a directory without snapshots in the
+densest cell, and the last snapshot's layer profile. --history: also one row per snapshot (its time in t_ref, densest
+layer, lateral spread, layer profile), to see whether layers form and whether they last (a run that is still
+running: whether its window will be a plug's). Exit status 0; 2 for a directory without snapshots in the
 window or a damaged snapshot. (Debian's h5py/numpy belong to /usr/bin/python3.)"""
 import argparse
 import collections
 import os
 import sys
 
+import h5py
 import numpy as np
 
 import closure_diagnostics as cd
 
-Profile = collections.namedtuple("Profile", "n dense spread cmax last")
+Profile = collections.namedtuple("Profile", "n dense spread cmax last history")
 
 
 def profile(run, n_cells, from_tref):
     """The run's Profile over its snapshots at or after from_tref t_ref; None when there are none."""
-    dens, spread, cmax, last = [], [], 0.0, None
+    dens, spread, cmax, last, history = [], [], 0.0, None, []
     for path in cd.run_snapshots(run):
         snap = cd.snapshot_cells(path, n_cells, from_tref)
         if snap is None:
@@ -38,9 +41,11 @@ def profile(run, n_cells, from_tref):
         spread.append(phi.std(axis=(0, 2)).mean())
         cmax = max(cmax, phi.max())
         last = layers
+        with h5py.File(path, "r") as f:  # snapshot_cells checked time and t_ref
+            history.append((float(f.attrs["time"]) / snap["t_ref"], float(dens[-1]), float(spread[-1]), layers))
     if not dens:
         return None
-    return Profile(len(dens), float(np.mean(dens)), float(np.mean(spread)), float(cmax), last)
+    return Profile(len(dens), float(np.mean(dens)), float(np.mean(spread)), float(cmax), last, history)
 
 
 def main():
@@ -49,6 +54,7 @@ def main():
     ap.add_argument("--cells", type=int, default=4, help="cells across the box width (default 4)")
     ap.add_argument("--from-tref", type=float, default=40.0, help="first snapshot time in t_ref (default 40)")
     ap.add_argument("--markdown", action="store_true")
+    ap.add_argument("--history", action="store_true", help="also a row per snapshot")
     a = ap.parse_intermixed_args()
     status = 0
     if a.markdown:
@@ -67,6 +73,10 @@ def main():
         else:
             print(f"{run}: {p.n} snapshots, densest layer {p.dense:.3f}, lateral spread {p.spread:.3f}, "
                   f"densest cell {p.cmax:.2f}\n  last: {prof}")
+        if a.history:
+            print(f"  {'t/t_ref':>7}  densest  spread  layers (bottom to top)")
+            for t, dense, spr, layers in p.history:
+                print(f"  {t:7.2f}  {dense:7.3f}  {spr:6.3f}  " + " ".join(f"{v:.2f}" for v in layers))
     return status
 
 

@@ -79,6 +79,12 @@ with tempfile.TemporaryDirectory() as tmp:
     r = subprocess.run([sys.executable, tool, run, "--from-tref", "20", "--markdown"], capture_output=True, text=True)
     check(r.returncode == 0 and f"| run | 2 | {want_dense:.3f} | {want_spread:.3f} | 0.50 |" in r.stdout,
           f"the markdown row (exit {r.returncode}): {r.stdout.strip().splitlines()[-1] if r.stdout.strip() else r.stderr}")
+    check([round(h[0], 9) for h in p.history] == [20.0, 30.0] and abs(p.history[0][1] - 0.5) < 1e-12 and
+          abs(p.history[1][2] - 0.4 * math.sqrt(15) / 16) < 1e-12, f"the history: {[h[:3] for h in p.history]}")
+    r = subprocess.run([sys.executable, tool, run, "--from-tref", "20", "--history"], capture_output=True, text=True)
+    rows = [l.split() for l in r.stdout.splitlines() if l.startswith("    20.00") or l.startswith("    30.00")]
+    check(r.returncode == 0 and len(rows) == 2 and rows[0][1:3] == ["0.500", "0.000"] and len(rows[1]) == 3 + 16,
+          f"--history: a row per snapshot, t/t_ref, densest, spread and the 16 layers ({r.stdout.strip()})")
     r = subprocess.run([sys.executable, tool, run, "--from-tref", "40"], capture_output=True, text=True)
     check(r.returncode == 2 and "no snapshot at or after 40" in r.stderr, f"no snapshot in the window: exit {r.returncode}")
     damaged = os.path.join(tmp, "damaged")
