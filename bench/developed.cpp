@@ -20,7 +20,7 @@
 //      (positions, velocities, spins, tangential springs -- partners re-identified through the
 //      periodic images --, fluid velocity, pressure, eps_old and the AB2 history), which gives a
 //      clustered state of the box `tile/base` times the scene's (4/4: the Table 1 box itself); each
-//      rank keeps the particles of its slab;
+//      rank keeps the particles of its first (equal) slab, and the first list rebuild balances the slabs;
 //   3. time: warm-up fluid steps, then `fluid-steps` coupled steps (the run's loop: prepare, deposit
 //      and drag, fluid step, particle forces, DEM sub-steps) with the engine's phase timers. No
 //      output, no series rows (their cost is in bench/README.md's coupled figures).
@@ -222,13 +222,7 @@ int main(int argc, char** argv) {
                           std::to_string(nt));
 
     cgd::fluid::FluidGrid grid(MPI_COMM_WORLD, scene.derived.cells, scene.domain.size_m);
-    cgd::dem::DemSettings ds = cgd::dem_settings_from_scene(scene);
-    {
-      std::vector<int> j0(ranks);
-      const int mine = grid.j0();
-      MPI_Allgather(&mine, 1, MPI_INT, j0.data(), 1, MPI_INT, MPI_COMM_WORLD);
-      for (int r : j0) ds.slab_lower_bounds.push_back(r * grid.spacing()[1]);
-    }
+    const cgd::dem::DemSettings ds = cgd::dem_settings_from_scene(scene);  // balanced slabs, as the engine's
     cgd::dem::DemSystem dem(ds, MPI_COMM_WORLD);
     cgd::PhaseTimers run_timers;
     cgd::CoupledStep coupled(scene, grid, ds.dt_s, run_timers);

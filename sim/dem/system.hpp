@@ -65,7 +65,13 @@ struct DemSettings {
   bool per_particle_drive = false;  // coupled runs: particles().a_ext replaces `drive`
   double overlap_limit = 0.25; // relative overlap (of the diameter) taken as a blow-up
   std::int64_t sort_interval_steps = 1000;
-  std::vector<double> slab_lower_bounds;  // empty: equal slabs; else one per rank (fluid grid rows)
+  std::vector<double> slab_lower_bounds;  // the first slabs: empty, equal slabs; else one lower bound per rank
+  // Balanced slabs (issue 25; the run driver's choice): at each full rebuild, before the migration, the slabs'
+  // bounds are set so that every rank owns about as many particles (quantiles of a global histogram of y), each
+  // slab at least min(d + 2 x the largest pair skin, L_y / ranks) high (the ghost shell, also of a restart between
+  // rebuilds). The trajectories do not depend on the bounds (newton off, sums in partner-id order): bit for bit
+  // the same at any rank count, with or without balancing. false: the first slabs stay.
+  bool balance_slabs = false;
 };
 
 /// Global diagnostics of step n (reduced over ranks), from the synchronous velocities.
@@ -129,6 +135,12 @@ class DemSystem {
   }
   const DemSettings& settings() const { return s_; }
   const SlabDecomposition& slabs() const { return slabs_; }
+  /// The lower y bound of every rank's slab in force (a checkpoint keeps them: a restart between rebuilds
+  /// needs the slabs its particles and anchors belong to).
+  const std::vector<double>& slab_bounds() const { return slabs_.lower_bounds(); }
+  /// Restart at the checkpoint's rank count: the slabs in force when it was written (before set_particles).
+  /// InputError if a slab is thinner than the contact cutoff.
+  void set_slab_bounds(const std::vector<double>& lower_bounds);
   std::int64_t step_index() const { return step_; }
   /// Per owned particle: its position at the last full rebuild and how far it may move from it before the
   /// list must be rebuilt (x, y, z, reach; m, as floats, rounded so that the predicate stays conservative).
@@ -157,6 +169,9 @@ class DemSystem {
 
  private:
   void full_rebuild();
+  /// balance_slabs: new slab bounds from the owned particles' (wrapped) heights, the same on every rank. Collective.
+  void balance_slabs();
+  static constexpr int kBalanceBins = 4096;  // of the histogram of y (the bound within a bin is interpolated)
   /// Ghosts and list; `mid_interval` (a restart between rebuilds): every particle may already have moved up to
   /// its reach from its anchor, so the pairs are listed at d + 2 skin (each side 2 x the largest half-skin).
   void build_ghosts_and_list(bool mid_interval);
@@ -189,6 +204,7 @@ class DemSystem {
   double last_max_overlap_rel_ = 0;
   double skin_m_ = 0, skin_min_m_ = 0, skin_max_m_ = 0;  // largest pair skin of the list; adaptive bounds
   double thinnest_slab_m_ = 0;                           // of all ranks (the ghost shell's limit)
+  double min_slab_m_ = 0;                                // balance_slabs: no slab thinner than this
   double anchor_margin_m_ = 0;                           // covers the float rounding of an anchor
   std::vector<float> anchor_;                            // per owned particle: x, y, z at the build, reach
   std::vector<float> half_skin_;                         // per owned particle and ghost, for a list build
