@@ -71,7 +71,8 @@ struct RunState {
   std::int64_t last_sort_step = 0;  // step of the last reordering by cell
   std::int64_t neighbor_rebuilds = 0;
   // the lower y bound of every rank's DEM slab in force, m (ranks values; the slabs move at list rebuilds, so a
-  // restart between rebuilds at the same rank count needs them); empty: not stored (before version 4)
+  // restart between rebuilds at the same rank count needs them); empty: not stored (before version 4; the
+  // restart then rebuilds the list at its first step)
   std::vector<double> slab_bounds;
   double wall_seconds = 0;            // wall time of the whole run so far (all sessions)
   std::vector<double> phase_seconds;  // per phase timer, the whole run so far (DEM phases first)
