@@ -358,6 +358,10 @@ int main(int argc, char** argv) {
     MPI_Allreduce(MPI_IN_PLACE, split, 2, MPI_DOUBLE, MPI_SUM, MPI_COMM_WORLD);
     // touching pairs at the last step (collective): the contact load of the state
     const double touching_pairs = dem.diagnostics().contacts;
+    // the particles each rank owns at the last step, and its slab (balanced at each list rebuild, sim/dem/system.hpp)
+    std::vector<std::int64_t> owned(static_cast<std::size_t>(ranks));
+    const std::int64_t owned_local = static_cast<std::int64_t>(dem.particles().n_owned);
+    MPI_Gather(&owned_local, 1, MPI_INT64_T, owned.data(), 1, MPI_INT64_T, 0, MPI_COMM_WORLD);
     const double bytes_local = static_cast<double>(dem.bytes());
     double bytes = 0;
     MPI_Allreduce(&bytes_local, &bytes, 1, MPI_DOUBLE, MPI_SUM, MPI_COMM_WORLD);
@@ -391,6 +395,11 @@ int main(int argc, char** argv) {
                   "%.3f contacts per particle (touching pairs x 2 / N)\n",
                   100.0 * split[0] / N, 100.0 * split[1] / N, 2.0 * touching_pairs / N);
       std::printf("engine arrays: %.0f B per particle (DemSystem::bytes, all ranks)\n", bytes / N);
+      std::printf("particles per rank at the last step (slab from y/d_p):");
+      for (int r = 0; r < ranks; ++r)
+        std::printf(" %.1f %% (%.1f)", 100.0 * static_cast<double>(owned[r]) / N,
+                    dem.slab_bounds()[static_cast<std::size_t>(r)] / scene.particles.diameter_m);
+      std::printf("\n");
       std::printf("\n%-22s %12s %14s %8s\n", "phase", "CPU s", "ns/part-step", "share");
       for (std::size_t k = 0; k < names.size(); ++k)
         std::printf("%-22s %12.4f %14.3f %7.1f %%\n", names[k].c_str(), sum[k], 1e9 * sum[k] / ps,

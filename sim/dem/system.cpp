@@ -38,7 +38,7 @@ DemSystem::DemSystem(const DemSettings& settings, MPI_Comm comm)
   // comes off every reach, four times over
   anchor_margin_m_ = std::ldexp(std::max({s_.box_m[0], s_.box_m[1], s_.box_m[2]}), -22);
   {
-    // the thinnest slab of all ranks (uneven FFTW blocks): every rank decides alike (no rank left waiting)
+    // the thinnest first slab of all ranks (given bounds may be uneven): every rank decides alike (no rank left waiting)
     double slab = slabs_.y_hi() - slabs_.y_lo();
     MPI_Allreduce(MPI_IN_PLACE, &slab, 1, MPI_DOUBLE, MPI_MIN, slabs_.comm());
     thinnest_slab_m_ = slab;

@@ -1,7 +1,8 @@
 #pragma once
 // DemSystem: one rank's share of a soft-sphere DEM run -- particles, slab decomposition, ghosts,
 // neighbour list with contact history, and the time step. The run loop (sim/run.hpp) drives it:
-//   prepare()  refresh ghosts, or rebuild (wrap, migrate, sort, ghosts, list) when due
+//   prepare()  refresh ghosts, or rebuild (wrap, balance the slabs (DemSettings::balance_slabs), migrate, sort,
+//              ghosts, list) when due
 //   advance()  force pass: the force on every particle with neighbours (integrator.hpp)
 //   [output of step n: x_n and v_n = (v_{n-1/2} + v_{n+1/2})/2, v_{n+1/2} formed from the forces]
 //   commit()   integration pass in place (each particle checked against its anchor's reach), detect blow-ups

@@ -1,6 +1,6 @@
 // A coupled CFD-DEM run (cgd::run_scene) on all ranks of MPI_COMM_WORLD agrees with the same run on one
 // rank (rank 0, MPI_COMM_SELF) to round-off, not bit for bit: the fluid's FFTs and global sums (PCG dot
-// products, averages) and the coupling's ghost-plane accumulation add in a different order on slabs
+// products, averages) and the coupling's sum of the ranks' deposits add in a different order on slabs
 // (sim/fluid/solver.hpp: 4e-15 per fluid step). Differences start at ~1e-16 and are amplified by
 // collisions (chaotic) -- measured on this scene, 1 vs 2 ranks, max |dx|/d_p: 2.9e-14 after 2.5 ms
 // (~9 fluid steps), 3.2e-13 after 5 ms, 2.1e-12 after 10 ms, 3.3e-11 after 20 ms, 2.9e-10 after 40 ms
@@ -221,7 +221,7 @@ TEST(CoupledMpi, AnyRankCountAgreesWithOneRank) {
 }
 
 // The drift-velocity law (fluid.drag = "drift"): its cell-mean velocity is deposited with the coupler's weights in
-// the particles' order and its ghost planes accumulated as phi's, so slabs change only the order of the same sums:
+// the particles' order and summed over the ranks as phi's, so slabs change only the order of the same sums:
 // 1 vs N ranks agree to the round-off bound of the test above (not bit for bit: the fluid's FFTs and sums differ
 // with the slabs, as for every law), and at one rank bit for bit. A table that varies with phi and the cell slip.
 TEST(CoupledMpi, DriftLawAgreesWithOneRank) {
