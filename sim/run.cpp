@@ -264,7 +264,7 @@ class RunDriver {
 
   void initial_state() {
     // Distributed and the same for any rank count (placement.hpp); the first rebuild migrates each
-    // particle to the rank that owns its slab.
+    // particle to the rank that owns its slab (the slabs balanced first).
     dem::LocalPlacement placement;
     const double t0 = wall_seconds();
     try {
@@ -720,7 +720,7 @@ class RunDriver {
   MPI_Comm comm_;
   int rank_ = 0, ranks_ = 1;
   fs::path dir_;
-  std::unique_ptr<fluid::FluidGrid> grid_;  // before dem_: the DEM slabs follow the grid's rows
+  std::unique_ptr<fluid::FluidGrid> grid_;  // the fluid's slabs (the DEM's are its own, balanced)
   dem::DemSystem dem_;
   std::unique_ptr<CoupledStep> coupled_;  // scenes that solve the fluid
   double dt_ = 0;
