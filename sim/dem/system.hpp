@@ -69,9 +69,9 @@ struct DemSettings {
   std::vector<double> slab_lower_bounds;  // the first slabs: empty, equal slabs; else one lower bound per rank
   // Balanced slabs (issue 25; the run driver's choice): at each full rebuild, before the migration, the slabs'
   // bounds are set so that every rank owns about as many particles (quantiles of a global histogram of y), each
-  // slab at least min(d + 2 x the largest pair skin, L_y / ranks) high (the ghost shell, also of a restart between
-  // rebuilds). The trajectories do not depend on the bounds (newton off, sums in partner-id order): bit for bit
-  // the same at any rank count, with or without balancing. false: the first slabs stay.
+  // slab at least min(d + 2 x the largest pair skin allowed, L_y / ranks) high (the ghost shell, also of a restart
+  // between rebuilds). The trajectories do not depend on the bounds (newton off, sums in partner-id order): bit for
+  // bit the same at any rank count, with or without balancing. false: the first slabs stay.
   bool balance_slabs = false;
 };
 
