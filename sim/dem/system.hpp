@@ -71,7 +71,10 @@ struct DemSettings {
   // bounds are set so that every rank owns about as many particles (quantiles of a global histogram of y), each
   // slab at least min(d + 2 x the largest pair skin allowed, L_y / ranks) high (the ghost shell, also of a restart
   // between rebuilds). The trajectories do not depend on the bounds (newton off, sums in partner-id order): bit for
-  // bit the same at any rank count, with or without balancing. false: the first slabs stay.
+  // bit the same at any rank count, with or without balancing. The coupled results are not: each rank's share of
+  // the deposit sums depends on which particles it owns, so the bounds are a function of the positions at the
+  // rebuild alone (a count, no weights from the lists, whose first build after a restart is wider), and a restart
+  // that restores the bounds in force reproduces them at every later rebuild. false: the first slabs stay.
   bool balance_slabs = false;
 };
 
