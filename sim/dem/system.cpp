@@ -73,10 +73,26 @@ void DemSystem::balance_slabs() {
   const int size = slabs_.size();
   if (size == 1) return;
   const double L = s_.box_m[1];
+  // each particle weighs 1 + 4 (m - 1), m the owned particles in its cell of a coarse grid of cells about the
+  // cutoff wide: its expected list entries (a sphere of the cutoff holds about 4 such cells), from the positions
+  // alone (integers: the sums are exact)
+  const double cell = s_.diameter_m + skin_max_m_;
+  int nc[3];
+  for (int a = 0; a < 3; ++a) nc[a] = std::max(1, static_cast<int>(s_.box_m[a] / cell));
+  auto cell_of = [&](std::size_t i) {
+    std::size_t c = 0;
+    for (int a = 2; a >= 0; --a) {
+      const int k = std::clamp(static_cast<int>(p_.x[3 * i + a] / s_.box_m[a] * nc[a]), 0, nc[a] - 1);
+      c = c * static_cast<std::size_t>(nc[a]) + static_cast<std::size_t>(k);
+    }
+    return c;
+  };
+  std::vector<std::int32_t> occupancy(static_cast<std::size_t>(nc[0]) * nc[1] * nc[2], 0);
+  for (std::size_t i = 0; i < p_.n_owned; ++i) ++occupancy[cell_of(i)];
   std::vector<std::int64_t> hist(kBalanceBins, 0);
   for (std::size_t i = 0; i < p_.n_owned; ++i) {
     const int b = static_cast<int>(p_.x[3 * i + 1] / L * kBalanceBins);  // wrapped: y in [0, L)
-    ++hist[static_cast<std::size_t>(std::clamp(b, 0, kBalanceBins - 1))];
+    hist[static_cast<std::size_t>(std::clamp(b, 0, kBalanceBins - 1))] += 1 + 4 * (occupancy[cell_of(i)] - 1);
   }
   MPI_Allreduce(MPI_IN_PLACE, hist.data(), kBalanceBins, MPI_INT64_T, MPI_SUM, slabs_.comm());
   std::int64_t total = 0;

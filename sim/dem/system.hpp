@@ -68,12 +68,14 @@ struct DemSettings {
   std::int64_t sort_interval_steps = 1000;
   std::vector<double> slab_lower_bounds;  // the first slabs: empty, equal slabs; else one lower bound per rank
   // Balanced slabs (issue 25; the run driver's choice): at each full rebuild, before the migration, the slabs'
-  // bounds are set so that every rank owns about as many particles (quantiles of a global histogram of y), each
-  // slab at least min(d + 2 x the largest pair skin allowed, L_y / ranks) high (the ghost shell, also of a restart
-  // between rebuilds). The trajectories do not depend on the bounds (newton off, sums in partner-id order): bit for
-  // bit the same at any rank count, with or without balancing. The coupled results are not: each rank's share of
-  // the deposit sums depends on which particles it owns, so the bounds are a function of the positions at the
-  // rebuild alone (a count, no weights from the lists, whose first build after a restart is wider), and a restart
+  // bounds are set so that every rank has about as much work: quantiles of a global histogram of y in which each
+  // particle weighs 1 + 4 (m - 1), m the particles of its rank in its cell of a coarse grid of cells one cutoff
+  // (d + the largest pair skin allowed) wide -- its expected list entries, a sphere of the cutoff holding about 4
+  // cells. Each slab at least min(d + 2 x the largest pair skin allowed, L_y / ranks) high (the ghost shell, also of
+  // a restart between rebuilds). The trajectories do not depend on the bounds (newton off, sums in partner-id
+  // order): bit for bit the same at any rank count, with or without balancing. The coupled results are not: each
+  // rank's share of the deposit sums depends on which particles it owns, so the bounds are a function of the
+  // positions at the rebuild alone (not of the lists, whose first build after a restart is wider), and a restart
   // that restores the bounds in force reproduces them at every later rebuild. false: the first slabs stay.
   bool balance_slabs = false;
 };

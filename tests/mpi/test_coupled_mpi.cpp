@@ -11,8 +11,8 @@
 // twice) shows at O(1e-3) and fails. At 1 rank WORLD is SELF: bit for bit.
 // The DEM slabs are balanced at every list rebuild (sim/dem/system.hpp), not the fluid's FFTW rows, and the
 // coupler's grid is whole on every rank (sim/coupling/coupler.hpp): the runs on N ranks also check, from their
-// final checkpoint, that the slabs in force hold about equal shares of the particles (the FFTW rows of this
-// grid, 6 + 5 at 2 ranks, would give 55/45). A restart at N ranks between list rebuilds continues bit for bit.
+// final checkpoint, that the slabs in force hold about equal shares of the particles (within 5 %; the FFTW rows of
+// this grid, 6 + 5 at 2 ranks, would give 55/45). A restart at N ranks between list rebuilds continues bit for bit.
 #include <gtest/gtest.h>
 #include <mpi.h>
 #include <stdlib.h>
@@ -190,8 +190,8 @@ void compare_with_one_rank(const cgd::Scene& scene, const std::string& base, con
         EXPECT_EQ(du, 0.0);
       }
     }
-    // balanced slabs: every rank within 3 % of an equal share at the end (balanced at the last rebuild, a few
-    // steps before; 3,521 particles, the histogram's bins hold about one)
+    // balanced slabs: every rank's particles within 5 % of an equal share at the end (the slabs balance the
+    // expected list entries, which follow the particles in this gas; the FFTW rows would be 9 % off)
     const CheckpointSlabs slabs = read_slabs(fs::path(base) / "world");
     EXPECT_EQ(static_cast<int>(slabs.bounds.size()), size);
     EXPECT_EQ(static_cast<int>(slabs.counts.size()), size);
@@ -201,7 +201,7 @@ void compare_with_one_rank(const cgd::Scene& scene, const std::string& base, con
     for (int r = 0; r < size && r < static_cast<int>(slabs.counts.size()); ++r) {
       std::printf(" %lld (slab from %.2f d_p)", static_cast<long long>(slabs.counts[r]),
                   slabs.bounds[r] / scene.particles.diameter_m);
-      EXPECT_NEAR(static_cast<double>(slabs.counts[r]), static_cast<double>(n) / size, 0.03 * n / size) << "rank " << r;
+      EXPECT_NEAR(static_cast<double>(slabs.counts[r]), static_cast<double>(n) / size, 0.05 * n / size) << "rank " << r;
     }
     std::printf("\n");
     failed = ::testing::Test::HasFailure() ? 1 : 0;

@@ -7,6 +7,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <functional>
 #include <map>
 #include <set>
@@ -204,10 +205,11 @@ TEST(DemMpi, AdaptiveSkinMatchesSerialRunBitForBit) {
 }
 
 // Balanced slabs (DemSettings::balance_slabs, the engine's choice): the bounds move at every full rebuild to
-// the quantiles of the particles' heights. A gas placed in the lower two thirds of the box (a 12 x 24 x 12 d
-// placement in a 12 x 36 x 12 d box) and falling under 20 g spreads and sinks, so the bounds move; the run on all
-// ranks still equals the serial one bit for bit, and right after each rebuild every rank holds about an equal
-// share.
+// the quantiles of the particles' heights, each weighted by its expected list entries (from the particles in its
+// coarse cell). A gas placed in the lower two thirds of the box (a 12 x 24 x 12 d placement in a 12 x 36 x 12 d box)
+// and falling under 20 g spreads and sinks, so the bounds move; the run on all ranks still equals the serial one bit
+// for bit, and right after each rebuild every rank holds about an equal share of the work, particles + list entries
+// (an estimate balanced, a measure checked: within 20 %; equal slabs would leave the top rank nearly empty).
 TEST(DemMpi, BalancedMovingSlabsMatchSerialRunBitForBit) {
   const double d = 75e-6;
   const std::array<double, 3> placed{12 * d, 24 * d, 12 * d}, box{12 * d, 36 * d, 12 * d};
@@ -221,21 +223,24 @@ TEST(DemMpi, BalancedMovingSlabsMatchSerialRunBitForBit) {
   s.balance_slabs = true;
   std::set<std::vector<double>> bound_sets;
   std::int64_t last_rebuilds = -1;
-  double worst_share = 0;  // the largest |owned - n/size| / (n/size) right after a rebuild
+  double worst_share = 0;  // the largest |work - mean| / mean right after a rebuild, work = owned + list entries
   const auto parallel = run(MPI_COMM_WORLD, s, pl, 1000, false, nullptr, [&](const DemSystem& sys) {
     if (sys.rebuilds() == last_rebuilds) return;
     last_rebuilds = sys.rebuilds();
     bound_sets.insert(sys.slab_bounds());
-    double mine = static_cast<double>(sys.particles().n_owned), top = 0;
-    const double share = static_cast<double>(n) / size;
-    mine = std::abs(mine - share) / share;
+    const double work = static_cast<double>(sys.particles().n_owned + sys.neighbor_entries());
+    double total = 0, top = 0;
+    MPI_Allreduce(&work, &total, 1, MPI_DOUBLE, MPI_SUM, MPI_COMM_WORLD);
+    const double share = total / size, mine = std::abs(work - share) / share;
     MPI_Allreduce(&mine, &top, 1, MPI_DOUBLE, MPI_MAX, MPI_COMM_WORLD);
     worst_share = std::max(worst_share, top);
   });
   if (size > 1) {
     EXPECT_GT(bound_sets.size(), 2u) << "the slab bounds should move with the particles";
-    EXPECT_LT(worst_share, 0.05) << "a rank's particles right after a rebuild, of an equal share";
+    EXPECT_LT(worst_share, 0.2) << "a rank's work right after a rebuild, of an equal share";
   }
+  if (rank == 0) std::printf("[ balanced slabs, %d ranks ] %zu sets of bounds, the work of a rank off an equal share by up to %.1f %%\n",
+                             size, bound_sets.size(), 100.0 * worst_share);
   if (rank != 0) return;
   const auto serial = run(MPI_COMM_SELF, s, pl, 1000);
   ASSERT_EQ(parallel.size(), static_cast<std::size_t>(n));
