@@ -76,7 +76,9 @@ void DemSystem::balance_slabs() {
   // each particle weighs 1 + 4 (m - 1), m the owned particles in its cell of a coarse grid of cells about the
   // cutoff wide: its expected list entries (a sphere of the cutoff holds about 4 such cells), from the positions
   // alone (integers: the sums are exact)
-  const double cell = s_.diameter_m + skin_max_m_;
+  // (at most kBalanceCells cells: a larger box gets coarser cells, its weights a rougher estimate)
+  const double volume = s_.box_m[0] * s_.box_m[1] * s_.box_m[2];
+  const double cell = std::max(s_.diameter_m + skin_max_m_, std::cbrt(volume / kBalanceCells));
   int nc[3];
   for (int a = 0; a < 3; ++a) nc[a] = std::max(1, static_cast<int>(s_.box_m[a] / cell));
   auto cell_of = [&](std::size_t i) {

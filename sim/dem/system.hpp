@@ -178,6 +178,7 @@ class DemSystem {
   /// balance_slabs: new slab bounds from the owned particles' (wrapped) heights, the same on every rank. Collective.
   void balance_slabs();
   static constexpr int kBalanceBins = 4096;  // of the histogram of y (the bound within a bin is interpolated)
+  static constexpr double kBalanceCells = 1 << 22;  // at most, of the coarse grid that weights the particles
   /// Ghosts and list; `mid_interval` (a restart between rebuilds): every particle may already have moved up to
   /// its reach from its anchor, so the pairs are listed at d + 2 skin (each side 2 x the largest half-skin).
   void build_ghosts_and_list(bool mid_interval);
