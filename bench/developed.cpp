@@ -20,7 +20,7 @@
 //      (positions, velocities, spins, tangential springs -- partners re-identified through the
 //      periodic images --, fluid velocity, pressure, eps_old and the AB2 history), which gives a
 //      clustered state of the box `tile/base` times the scene's (4/4: the Table 1 box itself); each
-//      rank keeps the particles of its slab;
+//      rank keeps the particles of its first (equal) slab, and the first list rebuild balances the slabs;
 //   3. time: warm-up fluid steps, then `fluid-steps` coupled steps (the run's loop: prepare, deposit
 //      and drag, fluid step, particle forces, DEM sub-steps) with the engine's phase timers. No
 //      output, no series rows (their cost is in bench/README.md's coupled figures).
@@ -222,13 +222,7 @@ int main(int argc, char** argv) {
                           std::to_string(nt));
 
     cgd::fluid::FluidGrid grid(MPI_COMM_WORLD, scene.derived.cells, scene.domain.size_m);
-    cgd::dem::DemSettings ds = cgd::dem_settings_from_scene(scene);
-    {
-      std::vector<int> j0(ranks);
-      const int mine = grid.j0();
-      MPI_Allgather(&mine, 1, MPI_INT, j0.data(), 1, MPI_INT, MPI_COMM_WORLD);
-      for (int r : j0) ds.slab_lower_bounds.push_back(r * grid.spacing()[1]);
-    }
+    const cgd::dem::DemSettings ds = cgd::dem_settings_from_scene(scene);  // balanced slabs, as the engine's
     cgd::dem::DemSystem dem(ds, MPI_COMM_WORLD);
     cgd::PhaseTimers run_timers;
     cgd::CoupledStep coupled(scene, grid, ds.dt_s, run_timers);
@@ -364,6 +358,10 @@ int main(int argc, char** argv) {
     MPI_Allreduce(MPI_IN_PLACE, split, 2, MPI_DOUBLE, MPI_SUM, MPI_COMM_WORLD);
     // touching pairs at the last step (collective): the contact load of the state
     const double touching_pairs = dem.diagnostics().contacts;
+    // the particles each rank owns at the last step, and its slab (balanced at each list rebuild, sim/dem/system.hpp)
+    std::vector<std::int64_t> owned(static_cast<std::size_t>(ranks));
+    const std::int64_t owned_local = static_cast<std::int64_t>(dem.particles().n_owned);
+    MPI_Gather(&owned_local, 1, MPI_INT64_T, owned.data(), 1, MPI_INT64_T, 0, MPI_COMM_WORLD);
     const double bytes_local = static_cast<double>(dem.bytes());
     double bytes = 0;
     MPI_Allreduce(&bytes_local, &bytes, 1, MPI_DOUBLE, MPI_SUM, MPI_COMM_WORLD);
@@ -397,6 +395,11 @@ int main(int argc, char** argv) {
                   "%.3f contacts per particle (touching pairs x 2 / N)\n",
                   100.0 * split[0] / N, 100.0 * split[1] / N, 2.0 * touching_pairs / N);
       std::printf("engine arrays: %.0f B per particle (DemSystem::bytes, all ranks)\n", bytes / N);
+      std::printf("particles per rank at the last step (slab from y/d_p):");
+      for (int r = 0; r < ranks; ++r)
+        std::printf(" %.1f %% (%.1f)", 100.0 * static_cast<double>(owned[r]) / N,
+                    dem.slab_bounds()[static_cast<std::size_t>(r)] / scene.particles.diameter_m);
+      std::printf("\n");
       std::printf("\n%-22s %12s %14s %8s\n", "phase", "CPU s", "ns/part-step", "share");
       for (std::size_t k = 0; k < names.size(); ++k)
         std::printf("%-22s %12.4f %14.3f %7.1f %%\n", names[k].c_str(), sum[k], 1e9 * sum[k] / ps,

@@ -41,14 +41,15 @@ void check_coarse_scene(const Scene& s, int ranks) {
                      std::to_string(kMinimumParcels) +
                      " are needed for a domain slip with a few-per-cent statistical error (rule: N >= " +
                      std::to_string(kMinimumParcels) + "); use smaller parcels, a larger box or a higher solids fraction");
-  // the slabs along y are whole rows of cells (FFTW-MPI blocks): the thinnest has floor(n_y/ranks) rows
-  const double slab = std::floor(static_cast<double>(x.cells[1]) / ranks) * s.domain.size_m[1] / x.cells[1];
+  // the particles' slabs along y start equal and are balanced at each list rebuild, none thinner than the cutoff
+  // or, in a box too low for that, all equal (sim/dem/system.hpp): L_y / ranks must hold the cutoff
+  const double slab = s.domain.size_m[1] / ranks;
   const double cutoff = x.parcel_diameter_m * (1.0 + s.contact.smallest_skin_over_dp());
   if (s.has_contacts() && slab < cutoff)
     throw InputError(file + ": with " + std::to_string(ranks) + " ranks the thinnest slab along y is " +
                      num(slab / s.particles.diameter_m) + " d_p, thinner than the contact cutoff " +
                      num(cutoff / s.particles.diameter_m) + " d_p (parcel diameter + skin): use at most " +
-                     std::to_string(std::max(1, static_cast<int>(x.cells[1] / std::ceil(cutoff / (s.domain.size_m[1] / x.cells[1]))))) +
+                     std::to_string(std::max(1, static_cast<int>(s.domain.size_m[1] / cutoff))) +
                      " ranks");
   if (!(s.run.sampling_start_s < s.run.end_time_s))
     throw InputError(file + ": run.sampling_start (" + num(s.run.sampling_start_s) + " s = " +

@@ -117,6 +117,9 @@ dem::DemSettings dem_settings_from_scene(const Scene& scene) {
   }
   s.overlap_limit = scene.numerics.overlap_limit;
   s.sort_interval_steps = scene.numerics.sort_interval_steps;
+  // the slabs follow the particles (issue 25): the coupler's grid is whole on every rank (coupler.hpp), so they
+  // need not match the fluid's FFTW rows
+  s.balance_slabs = true;
   const Vec3& g = scene.domain.gravity_m_s2;
   s.drive.accel = {g[0], g[1], g[2]};
   if (scene.fluid && scene.solves_fluid()) {
@@ -154,20 +157,6 @@ std::unique_ptr<fluid::FluidGrid> make_grid(const Scene& scene, MPI_Comm comm) {
   return std::make_unique<fluid::FluidGrid>(comm, scene.derived.cells, scene.domain.size_m);
 }
 
-/// DEM settings whose slabs coincide with the fluid grid's rows (FFTW-MPI blocks) when there is one.
-dem::DemSettings make_dem_settings(const Scene& scene, const fluid::FluidGrid* grid, MPI_Comm comm) {
-  dem::DemSettings s = dem_settings_from_scene(scene);
-  if (grid) {
-    int size = 1;
-    MPI_Comm_size(comm, &size);
-    std::vector<int> j0(size);
-    const int mine = grid->j0();
-    MPI_Allgather(&mine, 1, MPI_INT, j0.data(), 1, MPI_INT, comm);
-    for (int r : j0) s.slab_lower_bounds.push_back(r * grid->spacing()[1]);
-  }
-  return s;
-}
-
 class RunDriver {
  public:
   RunDriver(const Scene& scene, const RunSettings& settings, MPI_Comm comm)
@@ -175,7 +164,7 @@ class RunDriver {
         settings_(settings),
         comm_(comm),
         grid_(make_grid(scene, comm)),
-        dem_(make_dem_settings(scene, grid_.get(), comm), comm),
+        dem_(dem_settings_from_scene(scene), comm),
         progress_(Progress::Settings{}) {
     MPI_Comm_rank(comm_, &rank_);
     MPI_Comm_size(comm_, &ranks_);
@@ -275,7 +264,7 @@ class RunDriver {
 
   void initial_state() {
     // Distributed and the same for any rank count (placement.hpp); the first rebuild migrates each
-    // particle to the rank that owns its slab.
+    // particle to the rank that owns its slab (the slabs balanced first).
     dem::LocalPlacement placement;
     const double t0 = wall_seconds();
     try {
@@ -731,7 +720,7 @@ class RunDriver {
   MPI_Comm comm_;
   int rank_ = 0, ranks_ = 1;
   fs::path dir_;
-  std::unique_ptr<fluid::FluidGrid> grid_;  // before dem_: the DEM slabs follow the grid's rows
+  std::unique_ptr<fluid::FluidGrid> grid_;  // the fluid's slabs (the DEM's are its own, balanced)
   dem::DemSystem dem_;
   std::unique_ptr<CoupledStep> coupled_;  // scenes that solve the fluid
   double dt_ = 0;

@@ -13,7 +13,7 @@
 
 namespace cgd {
 
-/// DEM settings of a scene (contact parameters, drive, time step). Throws InputError for a
+/// DEM settings of a scene (contact parameters, drive, time step; slabs balanced at each rebuild). Throws InputError for a
 /// combination this build cannot simulate.
 dem::DemSettings dem_settings_from_scene(const Scene& scene);
 

@@ -22,6 +22,7 @@ void write_run_checkpoint(const std::string& path, MPI_Comm comm, const Scene& s
   state.skin_m = dem.skin();
   state.last_sort_step = dem.last_sort_step();
   state.neighbor_rebuilds = dem.rebuilds();
+  state.slab_bounds = dem.slab_bounds();
   state.wall_seconds = book.wall_seconds;
   state.phase_seconds = book.phase_seconds;
   state.frames = book.frames;
@@ -68,6 +69,10 @@ RestoredRun load_run_checkpoint(const std::string& path, MPI_Comm comm, const Sc
                      std::to_string(scene.derived.particle_count) + " (the scene changed since the checkpoint)");
   std::int64_t first = 0, count = total, cfirst = 0, ccount = total_c;
   const bool same_layout = file.ranks() == ranks;
+  // the slabs in force at the checkpoint (the DEM's move at every rebuild); without them (a checkpoint older than
+  // version 4) each rank still takes its own rows, and the first step rebuilds, which migrates them
+  const bool same_slabs = same_layout && !state.slab_bounds.empty();
+  if (same_slabs) dem.set_slab_bounds(state.slab_bounds);
   if (same_layout) {
     first = cfirst = 0;
     for (int r = 0; r < rank; ++r) {
@@ -114,8 +119,9 @@ RestoredRun load_run_checkpoint(const std::string& path, MPI_Comm comm, const Sc
   }
   dem.set_particles(std::move(d.id), std::move(d.position), std::move(d.velocity), std::move(d.angular_velocity));
   if (state.skin_m > 0) dem.set_skin(state.skin_m);  // the anchors' reaches are within half the build's skin
-  // no anchors (a checkpoint older than version 3) or another layout: rebuild at the first step
-  dem.restore(std::move(store), std::move(d.anchor), !same_layout || state.rebuild_due, step, state.last_sort_step);
+  // no anchors (a checkpoint older than version 3), no slab bounds (older than version 4) or another layout:
+  // rebuild at the first step
+  dem.restore(std::move(store), std::move(d.anchor), !same_slabs || state.rebuild_due, step, state.last_sort_step);
   dem.set_rebuilds(state.neighbor_rebuilds);
   RestoredRun out;
   out.step = step;

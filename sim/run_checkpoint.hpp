@@ -37,7 +37,8 @@ struct RestoredRun {
 };
 
 /// Loads `path` into `dem` (particles, contact store, rebuild state, the rebuild counter) and `coupled`
-/// (may be null): each rank its own rows at the checkpoint's rank count, else the particles of its slab.
+/// (may be null): each rank its own rows and the slabs in force at the checkpoint's rank count, else the particles
+/// of its slab (rebuilt, so balanced anew, at the first step).
 /// InputError naming the file for a checkpoint after `end_step`, friction switched since, or another
 /// particle count. Collective.
 RestoredRun load_run_checkpoint(const std::string& path, MPI_Comm comm, const Scene& scene, dem::DemSystem& dem,

@@ -27,7 +27,7 @@ struct Format {
 };
 
 /// Checkpoints are sealed (since version 2: the seal's user block; version 3 holds the neighbour-list
-/// anchors instead of one displacement bound) because a restart must not run on damaged
+/// anchors instead of one displacement bound, version 4 the DEM slab bounds in force) because a restart must not run on damaged
 /// bytes and users have no reason to edit them; every other format is read and validated by its content,
 /// so a file a researcher edited with h5py stays readable (docs/schema-run.md "Seal and validation").
 /// The filtered and drag model files are at version 2 since they spell each idea once (the micro law
@@ -37,7 +37,7 @@ struct Format {
 /// checksums are recorded by the runs and exports that used them (data/models/half_box.h5 among them).
 inline constexpr Format kSnapshot{"snapshot", 1, 1, false, "snapshot", "cgd-generate or cgd-coarse"};
 inline constexpr Format kSeries{"series", 1, 1, false, "series file", "cgd-generate or cgd-coarse"};
-inline constexpr Format kCheckpoint{"checkpoint", 3, 1, true, "checkpoint",
+inline constexpr Format kCheckpoint{"checkpoint", 4, 1, true, "checkpoint",
                                     "the checkpoint.h5 of a run directory, written by cgd-generate or cgd-coarse"};
 inline constexpr Format kFiltered{"filtered", 2, 1, false, "filtered file", "cgd-filter"};
 inline constexpr Format kDragModel{"drag_model", 2, 1, false, "drag model file", "cgd-fit"};

@@ -43,6 +43,12 @@ void write(const std::string& path, MPI_Comm comm, const Scene& scene, const Run
     file.set_attr(kRoot, kFrameCounts, frame_counts);
     file.set_attr(kRoot, kPlacementMethod, state.placement_method);
     file.set_attr(kRoot, kNeighborRebuilds, state.neighbor_rebuilds);
+    if (!state.slab_bounds.empty()) {  // the engine's always; absent, a restart rebuilds the list at once
+      if (static_cast<int>(state.slab_bounds.size()) != ranks)
+        throw RunError(path + ": checkpoint: " + std::to_string(state.slab_bounds.size()) + " slab bounds for " +
+                       std::to_string(ranks) + " ranks");
+      file.set_attr(kRoot, kSlabBounds, state.slab_bounds);
+    }
     file.create_group(kParticles);
     file.write_rows(kId, particles.id, n, 1);
     file.write_rows(kPosition, particles.position, n, 3);
@@ -121,6 +127,14 @@ Reader::Reader(const std::string& path, MPI_Comm comm) : file_(h5::File::open_re
   if (ranks_ < 1) throw InputError(path + ": attribute '" + kRanks + "' of '/' is " + std::to_string(ranks_) + ", expected >= 1");
   particle_counts_ = f.attr_ints(kRoot, kRankParticleCounts);
   contact_counts_ = f.attr_ints(kRoot, kRankContactCounts);
+  if (f.has_attr(kRoot, kSlabBounds)) {  // version 4: the DEM slabs in force, one lower bound per rank from 0
+    s.slab_bounds = schema::finite_attrs(f, kRoot, kSlabBounds);
+    bool valid = static_cast<std::int64_t>(s.slab_bounds.size()) == ranks_ && s.slab_bounds.front() == 0.0;
+    for (std::size_t r = 1; valid && r < s.slab_bounds.size(); ++r) valid = s.slab_bounds[r] > s.slab_bounds[r - 1];
+    if (!valid)
+      throw InputError(path + ": attribute '" + kSlabBounds + "' of '/' holds " + std::to_string(s.slab_bounds.size()) +
+                       " values, expected ranks = " + std::to_string(ranks_) + " increasing lower bounds from 0");
+  }
   for (const auto* list : {&particle_counts_, &contact_counts_}) {
     const char* name = list == &particle_counts_ ? kRankParticleCounts : kRankContactCounts;
     if (static_cast<std::int64_t>(list->size()) != ranks_)

@@ -49,6 +49,7 @@ inline constexpr const char* kFrameTimes = "frame_times";
 inline constexpr const char* kFrameCounts = "frame_counts";
 inline constexpr const char* kPlacementMethod = "placement_method";
 inline constexpr const char* kNeighborRebuilds = "neighbor_rebuilds";
+inline constexpr const char* kSlabBounds = "slab_bounds";  // version 4
 
 }  // namespace cgd::checkpoint::names
 
@@ -69,6 +70,10 @@ struct RunState {
   double skin_m = 0;                // the last build's largest pair skin (0: not stored)
   std::int64_t last_sort_step = 0;  // step of the last reordering by cell
   std::int64_t neighbor_rebuilds = 0;
+  // the lower y bound of every rank's DEM slab in force, m (ranks values; the slabs move at list rebuilds, so a
+  // restart between rebuilds at the same rank count needs them); empty: not stored (before version 4; the
+  // restart then rebuilds the list at its first step)
+  std::vector<double> slab_bounds;
   double wall_seconds = 0;            // wall time of the whole run so far (all sessions)
   std::vector<double> phase_seconds;  // per phase timer, the whole run so far (DEM phases first)
   std::vector<Frame> frames;

@@ -10,25 +10,28 @@
 
 namespace cgd::coupling {
 
-Coupler::Coupler(const CouplerSettings& settings, const fluid::FluidGrid& grid) : s_(settings), grid_(grid) {
+Coupler::Coupler(const CouplerSettings& settings, const fluid::FluidGrid& grid)
+    : s_(settings), grid_(grid), rows_(RowOwners::gather(grid.comm(), grid.j0(), grid.ny_local())) {
+  // the whole grid on every rank (exchange.hpp): the particles of a rank's DEM slab may lie in any row
   view_.cells = grid.cells();
   view_.spacing = grid.spacing();
-  view_.j0 = grid.j0();
-  view_.ny_local = grid.ny_local();
+  view_.j0 = 0;
+  view_.ny_local = grid.ny();
   view_.ghost = fluid::FluidGrid::kGhost;
-  phi_ = grid.make_field();
-  for (int d = 0; d < 3; ++d) bv_[d] = grid.make_field();
-  cells_.assign(kRead * grid.storage_size(), 0.0);
-  deposit_.assign(kDeposit * grid.storage_size(), 0.0);
+  owned_offset_ = static_cast<std::size_t>(grid.j0()) * grid.plane();
+  const std::size_t storage = view_.storage_size();
+  phi_.assign(storage, 0.0);
+  cells_.assign(kRead * storage, 0.0);
+  deposit_.assign(kDeposit * storage, 0.0);
   drift_ = settings.drag == DragLaw::Drift;
   if (drift_) {  // allocated only for the law that uses them
-    drift_mass_ = grid.make_field();
-    for (int d = 0; d < 3; ++d) drift_mv_[d] = grid.make_field();
-    drift_cells_.assign(3 * grid.storage_size(), 0.0);
+    drift_mass_.assign(storage, 0.0);
+    for (int d = 0; d < 3; ++d) drift_mv_[d].assign(storage, 0.0);
+    drift_cells_.assign(3 * storage, 0.0);
   }
   stress_ = settings.particle_stress.model != ParticleStressModel::None;
   if (stress_) {  // allocated only when the scene has a particle-phase pressure
-    stress_mu_ = grid.make_field();
+    stress_mu_.assign(storage, 0.0);
     stress_potential_ = std::make_unique<StressPotential>(settings.particle_stress);
   }
 }
@@ -40,10 +43,10 @@ void Coupler::particle_stress_accelerations(std::size_t n) {
   for (int j = 0; j < ny; ++j)
     for (int k = 0; k < nz; ++k)
       for (int i = 0; i < nx; ++i) {
-        const std::size_t c = g.index(i, j, k);
+        const std::size_t c = g.index(i, j, k) + owned_offset_;  // the owned rows, in the whole view
         stress_mu_[c] = mu(phi_[c]);
       }
-  exchange_interleaved_ghosts(g.comm(), view_, stress_mu_.data(), 1);
+  gather_rows(g.comm(), view_, rows_, stress_mu_.data(), 1);
   const double* m = stress_mu_.data();
   const double v_over_m = s_.particle_volume_m3 / s_.particle_mass_kg * s_.parcel_volume_factor;  // 1/rho_p
   pc_.stress_accel.assign(3 * n, 0.0);
@@ -68,18 +71,18 @@ void Coupler::particle_stress_accelerations(std::size_t n) {
 
 void Coupler::drift_cell_velocity() {
   const fluid::FluidGrid& g = grid_;
-  const std::size_t first = g.first_owned(), last = first + g.owned_size();
+  const std::size_t first = g.first_owned() + owned_offset_, last = first + g.owned_size();
   for (std::size_t c = first; c < last; ++c) {
     const double m = drift_mass_[c];
     double* out = &drift_cells_[3 * c];
     for (int d = 0; d < 3; ++d) out[d] = m > 0 ? drift_mv_[d][c] / m : cells_[kRead * c + d];  // empty: u_c, no slip
   }
-  exchange_interleaved_ghosts(g.comm(), view_, drift_cells_.data(), 3);
+  gather_rows(g.comm(), view_, rows_, drift_cells_.data(), 3);
 }
 
 void Coupler::cell_fields(const fluid::FluidState& state, bool with_phi) {
   // cell-centred velocity (mean of the two faces) and pressure gradient (central differences) on the
-  // owned rows, then the ghost rows from the neighbours: particles near a slab face need them
+  // owned rows, then every other rank's rows and the periodic ghost rows: a rank's particles may be anywhere
   const fluid::FluidGrid& g = grid_;
   const int nx = g.nx(), nz = g.nz(), ny = g.ny_local();
   const auto& h = g.spacing();
@@ -92,16 +95,16 @@ void Coupler::cell_fields(const fluid::FluidState& state, bool with_phi) {
     for (int k = 0; k < nz; ++k)
       for (int i = 0; i < nx; ++i) {
         const std::size_t c = g.index(i, j, k);
-        double* out = &cells_[kRead * c];
+        double* out = &cells_[kRead * (c + owned_offset_)];
         out[0] = 0.5 * (state.velocity[0][c] + state.velocity[0][g.index(xp[i], j, k)]);
         out[1] = 0.5 * (state.velocity[1][c] + state.velocity[1][g.index(i, j + 1, k)]);
         out[2] = 0.5 * (state.velocity[2][c] + state.velocity[2][g.index(i, j, zp[k])]);
         out[3] = (pr[g.index(xp[i], j, k)] - pr[g.index(xm[i], j, k)]) / (2.0 * h[0]);
         out[4] = (pr[g.index(i, j + 1, k)] - pr[g.index(i, j - 1, k)]) / (2.0 * h[1]);
         out[5] = (pr[g.index(i, j, zp[k])] - pr[g.index(i, j, zm[k])]) / (2.0 * h[2]);
-        out[6] = with_phi ? phi_[c] : 0.0;
+        out[6] = with_phi ? phi_[c + owned_offset_] : 0.0;
       }
-  exchange_interleaved_ghosts(g.comm(), view_, cells_.data(), kRead);
+  gather_rows(g.comm(), view_, rows_, cells_.data(), kRead);
 }
 
 void Coupler::compute_drag(const dem::Particles& p, fluid::FluidState& state) {
@@ -116,7 +119,8 @@ void Coupler::compute_drag(const dem::Particles& p, fluid::FluidState& state) {
     stencil_[i] = make_stencil(view_, &p.x[3 * i]);
     for_each_stencil_cell(view_, stencil_[i], [&](std::size_t c, double w) { phi_[c] += per_cell * w; });
   }
-  accumulate_ghosts(g.comm(), view_, {phi_.data()});
+  fold_ghost_rows(view_, phi_.data(), 1);
+  reduce_rows_to_owners(g.comm(), view_, rows_, phi_.data(), 1);
   if (drift_) {  // the cells' mean particle velocity: the same weights, the same particle order as phi
     for (int d = 0; d < 3; ++d) std::fill(drift_mv_[d].begin(), drift_mv_[d].end(), 0.0);
     for (std::size_t i = 0; i < n; ++i) {
@@ -126,17 +130,20 @@ void Coupler::compute_drag(const dem::Particles& p, fluid::FluidState& state) {
         for (int d = 0; d < 3; ++d) drift_mv_[d][c] += pw * v[d];
       });
     }
-    accumulate_ghosts(g.comm(), view_, {drift_mv_[0].data(), drift_mv_[1].data(), drift_mv_[2].data()});
+    for (int d = 0; d < 3; ++d) {
+      fold_ghost_rows(view_, drift_mv_[d].data(), 1);
+      reduce_rows_to_owners(g.comm(), view_, rows_, drift_mv_[d].data(), 1);
+    }
     drift_mass_ = phi_;  // the raw deposit sum_p V_p w_pc / V_cell, before the floor changes phi_
   }
   if (stress_) particle_stress_accelerations(n);  // from the raw deposit, before the floor changes phi_
-  // void fraction with a conservative floor
-  const std::size_t first = g.first_owned(), last = first + g.owned_size();
+  // void fraction with a conservative floor, on the owned rows (c: the fluid grid's index; c + off: the view's)
+  const std::size_t first = g.first_owned(), last = first + g.owned_size(), off = owned_offset_;
   double excess = 0, room = 0, local_max = 0;
   long long floored = 0;
   for (std::size_t c = first; c < last; ++c) {
-    const double eps = 1.0 - phi_[c];
-    local_max = std::max(local_max, phi_[c]);
+    const double eps = 1.0 - phi_[c + off];
+    local_max = std::max(local_max, phi_[c + off]);
     if (eps < s_.void_fraction_floor) {
       excess += s_.void_fraction_floor - eps;
       ++floored;
@@ -153,13 +160,13 @@ void Coupler::compute_drag(const dem::Particles& p, fluid::FluidState& state) {
                    std::to_string(s_.void_fraction_floor) + " anywhere");
   const double take_back = sums[0] > 0 ? sums[0] / sums[1] : 0.0;
   for (std::size_t c = first; c < last; ++c) {
-    double eps = 1.0 - phi_[c];
+    double eps = 1.0 - phi_[c + off];
     if (eps < s_.void_fraction_floor) eps = s_.void_fraction_floor;
     else eps -= take_back * (eps - s_.void_fraction_floor);
     // one-way: the particles do not act on the fluid at all, neither by drag (B = 0) nor by the volume
     // they take (the fluid is solved with eps = 1; sim/coupled_step.hpp periodic_driving); eps serves the drag law
     state.void_fraction[c] = s_.two_way ? eps : 1.0;
-    phi_[c] = 1.0 - eps;  // the solids fraction the fluid sees: used at the particles too
+    phi_[c + off] = 1.0 - eps;  // the solids fraction the fluid sees: used at the particles too
   }
   // 2. fluid at the particles (u, grad p, phi in one pass over the stencil), drag coefficients, and
   // their deposit B, B V
@@ -231,16 +238,18 @@ void Coupler::compute_drag(const dem::Particles& p, fluid::FluidState& state) {
       });
     }
   });
+  // B and B V summed over the ranks onto the owned rows (one-way: nothing deposited, B = 0); the fluid's
+  // ghost rows of B are its own to fill (solver.cpp)
   std::vector<double>& B = state.drag_coefficient;
-  const std::size_t storage = g.storage_size();
-  for (std::size_t c = 0; c < storage; ++c) {
-    B[c] = dep[kDeposit * c];
-    for (int d = 0; d < 3; ++d) bv_[d][c] = dep[kDeposit * c + 1 + d];
-  }
+  std::fill(B.begin(), B.end(), 0.0);
   if (s_.two_way) {
-    accumulate_ghosts(g.comm(), view_, {B.data(), bv_[0].data(), bv_[1].data(), bv_[2].data()});
-    for (std::size_t c = first; c < last; ++c)
-      for (int d = 0; d < 3; ++d) state.drag_velocity[d][c] = B[c] > 0 ? bv_[d][c] / B[c] : 0.0;
+    fold_ghost_rows(view_, dep, kDeposit);
+    reduce_rows_to_owners(g.comm(), view_, rows_, dep, kDeposit);
+    for (std::size_t c = first; c < last; ++c) {
+      const double* q = dep + kDeposit * (c + off);
+      B[c] = q[0];
+      for (int d = 0; d < 3; ++d) state.drag_velocity[d][c] = B[c] > 0 ? q[1 + d] / B[c] : 0.0;
+    }
   }
 }
 

@@ -40,6 +40,13 @@
 // held over the fluid step and added in step 4. The particles' forces need not sum to zero on a fixed grid (the
 // energy is not invariant under a shift of all particles against the cells), so the sum over all particles is
 // taken off each particle equally: the stress is internal and moves no momentum into or out of the particle phase.
+// Parallel runs (issue 25): the coupler's grid is the whole grid on every rank (exchange.hpp), because the DEM
+// slabs are chosen to balance the particles (sim/dem/system.hpp), not to match the fluid's FFTW rows. Each rank
+// deposits its particles on the whole grid; the deposits are folded (periodic ghost rows) and summed over the
+// ranks onto the fluid rows each rank owns, where eps, the floor and B, V are formed as on one rank; the cell
+// fields the particles read (u, grad p, phi; the drift law's vbar_c; the stress potential mu_c) are computed on
+// the owned rows and gathered to every rank. Across rank counts the sums run in another order (round-off, as the
+// fluid's FFTs); at one rank the arithmetic is that of a single slab, and for a given rank count it is fixed.
 // One-way coupling: steps 1-2 still give eps and the particle drag, but the fluid is solved as a pure
 // fluid (B = 0 and eps = 1 in its equations: a fluid that gets out of the particles' way without being
 // pushed develops a growing displacement flow), with hydrostatic driving (G = rho_f g; sim/coupled_step.hpp
@@ -109,28 +116,32 @@ class Coupler {
 
  private:
   /// Cell-centred u and grad p of the fluid's current level (and, with `with_phi`, phi_) into the
-  /// interleaved cells_ (kRead values per cell), owned rows and ghost rows.
+  /// interleaved cells_ (kRead values per cell): computed on the owned rows, then every row and the ghost rows
+  /// gathered to every rank. Collective.
   void cell_fields(const fluid::FluidState& state, bool with_phi);
   static constexpr int kRead = 8;  // u (3), grad p (3), phi, unused: one 64-byte line per cell
   static constexpr int kDeposit = 4;  // B, B V (3)
   /// Drift law: the owned cells' mean particle velocity (or u_c where nothing is deposited) into drift_cells_
-  /// (3 per cell, interleaved), then its ghost rows. After cell_fields(state, true). Collective.
+  /// (3 per cell, interleaved), then gathered to every rank. After cell_fields(state, true). Collective.
   void drift_cell_velocity();
-  /// Particle-phase pressure: mu(phi_c) of the raw deposit on the owned cells (its ghost rows exchanged), and at
+  /// Particle-phase pressure: mu(phi_c) of the raw deposit on the owned cells (gathered to every rank), and at
   /// each of the `n` owned particles a_p = -(V_p/m_p) sum_c mu_c grad w_pc with its stencil, into pc_.stress_accel,
   /// less the mean over all particles. Before the void-fraction floor alters phi_. Collective.
   void particle_stress_accelerations(std::size_t n);
   CouplerSettings s_;
   bool stress_ = false;            // particle_stress.model != None: the two members below are used
-  std::vector<double> stress_mu_;  // stress only: mu(phi_c), a grid field
+  std::vector<double> stress_mu_;  // stress only: mu(phi_c), on the whole view
   std::unique_ptr<StressPotential> stress_potential_;  // stress only
   bool drift_ = false;             // fluid.drag = "drift": the cell-mean velocity deposit below is used
   std::vector<double> drift_mass_, drift_mv_[3];  // drift only: sum V w / V_cell (raw) and sum V w v / V_cell
   std::vector<double> drift_cells_;               // drift only: vbar_c, 3 per cell
   const fluid::FluidGrid& grid_;
-  GridView view_;
-  std::vector<double> phi_, bv_[3];
-  std::vector<double> cells_;      // kRead per cell (storage layout of the grid, interleaved)
+  RowOwners rows_;                 // every rank's fluid rows
+  GridView view_;                  // the whole grid, j0 = 0, ny_local = n_y, kGhost periodic ghost rows
+  std::size_t owned_offset_ = 0;   // j0 * plane: a fluid-grid index plus this is the view's index
+  // every field below is on the whole view (storage layout view_.storage_size(), cell-major when interleaved)
+  std::vector<double> phi_;
+  std::vector<double> cells_;      // kRead per cell
   std::vector<double> deposit_;    // kDeposit per cell
   std::vector<Stencil> stencil_;   // per owned particle, from the last compute_drag
   ParticleCoupling pc_;

@@ -1,68 +1,87 @@
 #include "sim/coupling/exchange.hpp"
 
 #include <algorithm>
+#include <string>
+
+#include "core/error.hpp"
 
 namespace cgd::coupling {
 
-void accumulate_ghosts(MPI_Comm comm, const GridView& g, std::initializer_list<double*> fields) {
-  int rank = 0, size = 1;
-  MPI_Comm_rank(comm, &rank);
+RowOwners RowOwners::gather(MPI_Comm comm, int j0, int count) {
+  int size = 1;
   MPI_Comm_size(comm, &size);
-  const int up = (rank + 1) % size, down = (rank + size - 1) % size;
-  const std::size_t block = g.plane() * static_cast<std::size_t>(g.ghost);
-  const std::size_t nf = fields.size();
-  std::vector<double> send(block * nf), recv(block * nf);
-  // Two rounds: lower ghosts -> down neighbour's top rows; upper ghosts -> up neighbour's bottom rows.
-  for (int round = 0; round < 2; ++round) {
-    const std::size_t ghost_first = round == 0 ? 0 : g.index(0, g.ny_local, 0);
-    std::size_t f = 0;
-    for (double* field : fields) {
-      std::copy(field + ghost_first, field + ghost_first + block, send.begin() + static_cast<std::ptrdiff_t>(f * block));
-      ++f;
-    }
-    const int to = round == 0 ? down : up, from = round == 0 ? up : down;
-    if (size == 1) {
-      recv = send;
-    } else {
-      MPI_Sendrecv(send.data(), static_cast<int>(send.size()), MPI_DOUBLE, to, 70 + round, recv.data(),
-                   static_cast<int>(recv.size()), MPI_DOUBLE, from, 70 + round, comm, MPI_STATUS_IGNORE);
-    }
-    // received lower ghosts of `up` land on my top rows; received upper ghosts of `down` on my bottom rows
-    const std::size_t dest = round == 0 ? g.index(0, g.ny_local - g.ghost, 0) : g.index(0, 0, 0);
-    f = 0;
-    for (double* field : fields) {
-      const double* in = recv.data() + f * block;
-      for (std::size_t k = 0; k < block; ++k) field[dest + k] += in[k];
-      ++f;
-    }
+  RowOwners r;
+  r.j0.resize(static_cast<std::size_t>(size));
+  r.count.resize(static_cast<std::size_t>(size));
+  MPI_Allgather(&j0, 1, MPI_INT, r.j0.data(), 1, MPI_INT, comm);
+  MPI_Allgather(&count, 1, MPI_INT, r.count.data(), 1, MPI_INT, comm);
+  int next = 0;
+  for (int q = 0; q < size; ++q) {
+    if (r.j0[q] != next) throw RunError("coupling rows: rank " + std::to_string(q) + "'s rows do not follow rank " +
+                                        std::to_string(q - 1) + "'s");
+    next += r.count[q];
   }
-  for (double* field : fields) {
-    std::fill(field, field + block, 0.0);
-    std::fill(field + g.index(0, g.ny_local, 0), field + g.index(0, g.ny_local, 0) + block, 0.0);
+  return r;
+}
+
+void fold_ghost_rows(const GridView& g, double* field, int k) {
+  const std::size_t K = static_cast<std::size_t>(k);
+  const std::size_t block = g.plane() * static_cast<std::size_t>(g.ghost) * K;
+  double* lower_ghosts = field + K * g.index(0, -g.ghost, 0);
+  double* upper_ghosts = field + K * g.index(0, g.ny_local, 0);
+  double* bottom_rows = field + K * g.index(0, 0, 0);
+  double* top_rows = field + K * g.index(0, g.ny_local - g.ghost, 0);
+  for (std::size_t m = 0; m < block; ++m) top_rows[m] += lower_ghosts[m];
+  for (std::size_t m = 0; m < block; ++m) bottom_rows[m] += upper_ghosts[m];
+  std::fill(lower_ghosts, lower_ghosts + block, 0.0);
+  std::fill(upper_ghosts, upper_ghosts + block, 0.0);
+}
+
+namespace {
+
+/// Counts and displacements (in doubles, from row 0) of every rank's rows of a k-valued field.
+void row_blocks(const GridView& g, const RowOwners& rows, int k, std::vector<int>& counts, std::vector<int>& displs) {
+  const std::size_t per_row = g.plane() * static_cast<std::size_t>(k);
+  counts.resize(rows.count.size());
+  displs.resize(rows.count.size());
+  for (std::size_t q = 0; q < rows.count.size(); ++q) {
+    counts[q] = static_cast<int>(per_row * static_cast<std::size_t>(rows.count[q]));
+    displs[q] = static_cast<int>(per_row * static_cast<std::size_t>(rows.j0[q]));
   }
 }
 
-void exchange_interleaved_ghosts(MPI_Comm comm, const GridView& g, double* field, int k) {
+}  // namespace
+
+void reduce_rows_to_owners(MPI_Comm comm, const GridView& g, const RowOwners& rows, double* field, int k) {
   int rank = 0, size = 1;
   MPI_Comm_rank(comm, &rank);
   MPI_Comm_size(comm, &size);
+  if (size == 1) return;
+  std::vector<int> counts, displs;
+  row_blocks(g, rows, k, counts, displs);
+  double* first_row = field + static_cast<std::size_t>(k) * g.index(0, 0, 0);
+  std::vector<double> mine(static_cast<std::size_t>(counts[rank]));
+  MPI_Reduce_scatter(first_row, mine.data(), counts.data(), MPI_DOUBLE, MPI_SUM, comm);
+  std::copy(mine.begin(), mine.end(), first_row + displs[rank]);
+}
+
+void gather_rows(MPI_Comm comm, const GridView& g, const RowOwners& rows, double* field, int k) {
+  int size = 1;
+  MPI_Comm_size(comm, &size);
+  if (size > 1) {
+    std::vector<int> counts, displs;
+    row_blocks(g, rows, k, counts, displs);
+    double* first_row = field + static_cast<std::size_t>(k) * g.index(0, 0, 0);
+    MPI_Allgatherv(MPI_IN_PLACE, 0, MPI_DATATYPE_NULL, first_row, counts.data(), displs.data(), MPI_DOUBLE, comm);
+  }
   const std::size_t K = static_cast<std::size_t>(k);
   const std::size_t block = g.plane() * static_cast<std::size_t>(g.ghost) * K;
   double* lower_ghosts = field + K * g.index(0, -g.ghost, 0);
   double* upper_ghosts = field + K * g.index(0, g.ny_local, 0);
   const double* bottom_rows = field + K * g.index(0, 0, 0);
   const double* top_rows = field + K * g.index(0, g.ny_local - g.ghost, 0);
-  if (size == 1) {
-    std::copy(top_rows, top_rows + block, lower_ghosts);
-    std::copy(bottom_rows, bottom_rows + block, upper_ghosts);
-    return;
-  }
-  const int up = (rank + 1) % size, down = (rank + size - 1) % size;
-  // my bottom rows go down, the rows above my slab come from up; then the mirror
-  MPI_Sendrecv(bottom_rows, static_cast<int>(block), MPI_DOUBLE, down, 73, upper_ghosts, static_cast<int>(block),
-               MPI_DOUBLE, up, 73, comm, MPI_STATUS_IGNORE);
-  MPI_Sendrecv(top_rows, static_cast<int>(block), MPI_DOUBLE, up, 74, lower_ghosts, static_cast<int>(block),
-               MPI_DOUBLE, down, 74, comm, MPI_STATUS_IGNORE);
+  std::copy(top_rows, top_rows + block, lower_ghosts);
+  std::copy(bottom_rows, bottom_rows + block, upper_ghosts);
 }
 
 }  // namespace cgd::coupling

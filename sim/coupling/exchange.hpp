@@ -1,10 +1,15 @@
 #pragma once
-// Particle <-> grid exchange on the fluid's slab layout (sim/fluid/grid.hpp): fields stored with y
-// slowest, index (j_local + ghost) * n_z n_x + k n_x + i, `ghost` planes below and above the owned
-// rows, x and z periodic by index. Deposition adds TSC-weighted particle quantities into the owned
-// and ghost planes; `accumulate_ghosts` then adds every ghost plane into the rank that owns it (the
-// transpose of the fluid's ghost exchange), so the total deposited equals the sum over particles to
-// round-off, on any number of ranks.
+// Particle <-> grid exchange on a coupling grid replicated on every rank (issue 25): the whole y range,
+// j0 = 0 and ny_local = n_y, with `ghost` planes below and above (periodic copies), fields stored with y
+// slowest, index (j + ghost) * n_z n_x + k n_x + i, x and z periodic by index. Every rank's particles may
+// lie anywhere in y (their DEM slabs are chosen for balance, not to match the fluid's FFTW rows), so each
+// rank deposits into a whole grid; `fold_ghost_rows` adds the ghost planes into the rows they wrap to and
+// `reduce_rows_to_owners` sums the rows over the ranks onto the fluid rows each rank owns (the transpose of
+// the gather below), so the total deposited equals the sum over particles to round-off, on any number of
+// ranks. The other way, each rank computes the cell fields the particles read on its own fluid rows and
+// `gather_rows` gives every rank every row and refills the periodic ghost planes. The fluid grid's index of
+// an owned cell plus j0 * plane is its index here (both layouts put `ghost` planes first). One rank: no MPI,
+// the fold and ghost copies alone, the arithmetic of the slab exchange this replaced.
 #include <mpi.h>
 
 #include <array>
@@ -31,7 +36,7 @@ struct GridView {
 };
 
 /// The 27 cells and weights of a particle at x (m; x and z may lie outside the box, y within a
-/// cell of this slab). Calls f(storage index, weight) for each; the weights sum to 1.
+/// cell of the view's rows). Calls f(storage index, weight) for each; the weights sum to 1.
 template <class F>
 inline void for_each_tsc_cell(const GridView& g, const double* x, F&& f) {
   const AxisWeights ax = tsc_weights(x[0], 0.0, g.spacing[0]);
@@ -50,7 +55,7 @@ inline void for_each_tsc_cell(const GridView& g, const double* x, F&& f) {
     }
 }
 
-/// A particle's TSC stencil on this slab (issue 17: computed once per fluid step and kept, instead of
+/// A particle's TSC stencil on the view (issue 17: computed once per fluid step and kept, instead of
 /// the kernel and its integer modulos 5 times per particle and step): the first cell along each axis
 /// (x and z unwrapped, y local) and the particle's offset d from the nearest cell centre along each
 /// axis, from which the weights follow exactly as tsc_weights computes them.
@@ -132,11 +137,25 @@ inline void for_each_stencil_cell_gradient(const GridView& g, const Stencil& st,
     }
 }
 
-/// Fill the ghost planes of a field of `k` values per cell (interleaved, cell-major) from the
-/// neighbouring slabs (periodic in y). Collective.
-void exchange_interleaved_ghosts(MPI_Comm comm, const GridView& g, double* field, int k);
+/// The fluid rows of every rank: rank r owns global rows [j0[r], j0[r] + count[r]), increasing with r and
+/// together [0, n_y) (FFTW-MPI's blocks, sim/fluid/grid.hpp).
+struct RowOwners {
+  std::vector<int> j0, count;
+  /// The rows of every rank of `comm`, from each rank's own (j0, count). Collective.
+  static RowOwners gather(MPI_Comm comm, int j0, int count);
+};
 
-/// Add every ghost plane into the owning rank's rows (periodic in y) and zero the ghosts. Collective.
-void accumulate_ghosts(MPI_Comm comm, const GridView& g, std::initializer_list<double*> fields);
+/// Add the ghost planes of a field of `k` values per cell (interleaved) into the rows they wrap to (lower
+/// ghosts onto the top rows, then upper ghosts onto the bottom rows) and zero them. `g` covers the whole y
+/// range (j0 = 0, ny_local = n_y). Local.
+void fold_ghost_rows(const GridView& g, double* field, int k);
+
+/// Sum rows [0, n_y) of a field of `k` values per cell over the ranks (one MPI_Reduce_scatter) into the rows
+/// each rank owns (`rows`); the other rows keep this rank's own values. After fold_ghost_rows. Collective.
+void reduce_rows_to_owners(MPI_Comm comm, const GridView& g, const RowOwners& rows, double* field, int k);
+
+/// Give every rank the owners' values of every row (one MPI_Allgatherv; each rank's own rows are the input),
+/// then fill the ghost planes periodically (rows -ghost.. -1 from the top, n_y.. from the bottom). Collective.
+void gather_rows(MPI_Comm comm, const GridView& g, const RowOwners& rows, double* field, int k);
 
 }  // namespace cgd::coupling

@@ -1,5 +1,6 @@
 #include "sim/dem/comm.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <string>
@@ -15,13 +16,25 @@ SlabDecomposition::SlabDecomposition(MPI_Comm comm, std::array<double, 3> box_m)
 }
 
 SlabDecomposition::SlabDecomposition(MPI_Comm comm, std::array<double, 3> box_m, const std::vector<double>& lower_bounds)
-    : comm_(comm), box_(box_m), lower_(lower_bounds) {
+    : comm_(comm), box_(box_m) {
   MPI_Comm_rank(comm_, &rank_);
   MPI_Comm_size(comm_, &size_);
-  if (static_cast<int>(lower_.size()) != size_ || lower_.front() != 0.0)
+  set_lower_bounds(lower_bounds);
+}
+
+void SlabDecomposition::set_lower_bounds(const std::vector<double>& lower_bounds) {
+  if (static_cast<int>(lower_bounds.size()) != size_ || lower_bounds.front() != 0.0)
     throw RunError("slab bounds: need one lower bound per rank, the first at y = 0");
   for (int r = 1; r < size_; ++r)
-    if (!(lower_[r] > lower_[r - 1]) || !(lower_[r] < box_[1])) throw RunError("slab bounds must increase within the box");
+    if (!(lower_bounds[r] > lower_bounds[r - 1]) || !(lower_bounds[r] < box_[1]))
+      throw RunError("slab bounds must increase within the box");
+  lower_ = lower_bounds;
+}
+
+double SlabDecomposition::thinnest() const {
+  double t = box_[1];
+  for (int r = 0; r < size_; ++r) t = std::min(t, slab_lo(r + 1) - slab_lo(r));
+  return t;
 }
 
 int SlabDecomposition::owner(double y) const {

@@ -1,6 +1,8 @@
 #pragma once
 // Slab decomposition along y (ARCHITECTURE.md "Parallel decomposition") and the ghost-particle exchange.
-// Every rank owns the particles whose y lies in [y_lo, y_hi). Ghosts are built in three stages,
+// Every rank owns the particles whose y lies in [y_lo, y_hi). The bounds may move between neighbour-list
+// builds (DemSystem balances the particles over the ranks at each full rebuild, set_lower_bounds): ghosts
+// and migration work for slabs of any height at least the ghost shell. Ghosts are built in three stages,
 // x, z, then y, each stage taking as candidates everything that exists before it (owned + earlier
 // ghosts), so edge and corner images come out right. x and z are always local periodic images; y goes
 // to the neighbouring ranks (or is a local image with one rank). Between rebuilds `forward` refreshes
@@ -19,9 +21,14 @@ class SlabDecomposition {
  public:
   /// Equal slabs of the box height.
   SlabDecomposition(MPI_Comm comm, std::array<double, 3> box_m);
-  /// Slabs with given lower bounds (one per rank, increasing, starting at 0), e.g. the fluid grid's
-  /// FFTW-MPI rows times the cell height, so particles and cells share their slabs.
+  /// Slabs with given lower bounds (one per rank, increasing, starting at 0, below the box height).
   SlabDecomposition(MPI_Comm comm, std::array<double, 3> box_m, const std::vector<double>& lower_bounds);
+  /// New lower bounds (as the constructor's; RunError otherwise). The same on every rank; owned particles
+  /// outside their new slab move at the next migrate().
+  void set_lower_bounds(const std::vector<double>& lower_bounds);
+  const std::vector<double>& lower_bounds() const { return lower_; }
+  /// The thinnest slab's height, m.
+  double thinnest() const;
 
   MPI_Comm comm() const { return comm_; }
   int rank() const { return rank_; }

@@ -38,7 +38,7 @@ DemSystem::DemSystem(const DemSettings& settings, MPI_Comm comm)
   // comes off every reach, four times over
   anchor_margin_m_ = std::ldexp(std::max({s_.box_m[0], s_.box_m[1], s_.box_m[2]}), -22);
   {
-    // the thinnest slab of all ranks (uneven FFTW blocks): every rank decides alike (no rank left waiting)
+    // the thinnest first slab of all ranks (given bounds may be uneven): every rank decides alike (no rank left waiting)
     double slab = slabs_.y_hi() - slabs_.y_lo();
     MPI_Allreduce(MPI_IN_PLACE, &slab, 1, MPI_DOUBLE, MPI_MIN, slabs_.comm());
     thinnest_slab_m_ = slab;
@@ -54,9 +54,66 @@ DemSystem::DemSystem(const DemSettings& settings, MPI_Comm comm)
       throw InputError("too many MPI ranks (" + std::to_string(slabs_.size()) + ") for the box: each y-slab (the thinnest " +
                        std::to_string(slab) + " m) must be at least one contact cutoff (" +
                        std::to_string(cutoff()) + " m) high; use at most " +
-                       std::to_string(static_cast<int>(s_.box_m[1] / cutoff())) +
-                       " ranks of equal slabs (a fluid grid's FFTW blocks can be unequal: its thinnest slab counts)");
+                       std::to_string(static_cast<int>(s_.box_m[1] / cutoff())) + " ranks");
   }
+  // balanced slabs: thick enough for every list the skins allow, mid-interval restarts included (d + 2 skin), or
+  // equal when the box is too low for that (the skin is then clamped to the thinnest slab above, as for equal slabs)
+  min_slab_m_ = std::min(s_.diameter_m + 2.0 * skin_max_m_, s_.box_m[1] / slabs_.size());
+}
+
+void DemSystem::set_slab_bounds(const std::vector<double>& lower_bounds) {
+  slabs_.set_lower_bounds(lower_bounds);
+  thinnest_slab_m_ = slabs_.thinnest();
+  if (s_.contacts && thinnest_slab_m_ < cutoff())
+    throw InputError("slab bounds: the thinnest slab (" + std::to_string(thinnest_slab_m_) +
+                     " m) is thinner than the contact cutoff (" + std::to_string(cutoff()) + " m)");
+}
+
+void DemSystem::balance_slabs() {
+  const int size = slabs_.size();
+  if (size == 1) return;
+  const double L = s_.box_m[1];
+  // each particle weighs 1 + 4 (m - 1), m the owned particles in its cell of a coarse grid of cells about the
+  // cutoff wide: its expected list entries (a sphere of the cutoff holds about 4 such cells), from the positions
+  // alone (integers: the sums are exact)
+  // (at most kBalanceCells cells: a larger box gets coarser cells, its weights a rougher estimate)
+  const double volume = s_.box_m[0] * s_.box_m[1] * s_.box_m[2];
+  const double cell = std::max(s_.diameter_m + skin_max_m_, std::cbrt(volume / kBalanceCells));
+  int nc[3];
+  for (int a = 0; a < 3; ++a) nc[a] = std::max(1, static_cast<int>(s_.box_m[a] / cell));
+  auto cell_of = [&](std::size_t i) {
+    std::size_t c = 0;
+    for (int a = 2; a >= 0; --a) {
+      const int k = std::clamp(static_cast<int>(p_.x[3 * i + a] / s_.box_m[a] * nc[a]), 0, nc[a] - 1);
+      c = c * static_cast<std::size_t>(nc[a]) + static_cast<std::size_t>(k);
+    }
+    return c;
+  };
+  std::vector<std::int32_t> occupancy(static_cast<std::size_t>(nc[0]) * nc[1] * nc[2], 0);
+  for (std::size_t i = 0; i < p_.n_owned; ++i) ++occupancy[cell_of(i)];
+  std::vector<std::int64_t> hist(kBalanceBins, 0);
+  for (std::size_t i = 0; i < p_.n_owned; ++i) {
+    const int b = static_cast<int>(p_.x[3 * i + 1] / L * kBalanceBins);  // wrapped: y in [0, L)
+    hist[static_cast<std::size_t>(std::clamp(b, 0, kBalanceBins - 1))] += 1 + 4 * (occupancy[cell_of(i)] - 1);
+  }
+  MPI_Allreduce(MPI_IN_PLACE, hist.data(), kBalanceBins, MPI_INT64_T, MPI_SUM, slabs_.comm());
+  std::int64_t total = 0;
+  for (std::int64_t c : hist) total += c;
+  // rank r's lower bound at the r/size quantile, interpolated within its bin
+  std::vector<double> lower(static_cast<std::size_t>(size), 0.0);
+  std::int64_t below = 0;  // particles in the bins before b
+  int b = 0;
+  for (int r = 1; r < size; ++r) {
+    const double target = static_cast<double>(total) * r / size;
+    while (b < kBalanceBins && static_cast<double>(below + hist[b]) < target) below += hist[b++];
+    const double within = b < kBalanceBins && hist[b] > 0 ? (target - static_cast<double>(below)) / static_cast<double>(hist[b]) : 0.0;
+    lower[r] = (static_cast<double>(b) + within) * L / kBalanceBins;
+  }
+  // no slab thinner than min_slab_m_ (the box holds size of them): up from the bottom, then down from the top
+  for (int r = 1; r < size; ++r) lower[r] = std::max(lower[r], lower[r - 1] + min_slab_m_);
+  for (int r = size - 1; r >= 1; --r) lower[r] = std::min(lower[r], (r == size - 1 ? L : lower[r + 1]) - min_slab_m_);
+  slabs_.set_lower_bounds(lower);
+  thinnest_slab_m_ = slabs_.thinnest();
 }
 
 void DemSystem::set_particles(std::vector<std::int64_t> ids, std::vector<double> x, std::vector<double> v,
@@ -118,6 +175,7 @@ void DemSystem::prepare() {
 void DemSystem::full_rebuild() {
   if (list_valid_ && p_.rotation) list_.save_history(p_, store_);
   for (std::size_t i = 0; i < p_.n_owned; ++i) slabs_.wrap(&p_.x[3 * i]);
+  if (s_.balance_slabs) balance_slabs();
   ghosts_.migrate(p_, store_);
   if (last_sort_step_ < 0 || step_ - last_sort_step_ >= s_.sort_interval_steps) {
     // Reorder owned particles by cell for memory locality. Results do not depend on the order.

@@ -1,7 +1,8 @@
 #pragma once
 // DemSystem: one rank's share of a soft-sphere DEM run -- particles, slab decomposition, ghosts,
 // neighbour list with contact history, and the time step. The run loop (sim/run.hpp) drives it:
-//   prepare()  refresh ghosts, or rebuild (wrap, migrate, sort, ghosts, list) when due
+//   prepare()  refresh ghosts, or rebuild (wrap, balance the slabs (DemSettings::balance_slabs), migrate, sort,
+//              ghosts, list) when due
 //   advance()  force pass: the force on every particle with neighbours (integrator.hpp)
 //   [output of step n: x_n and v_n = (v_{n-1/2} + v_{n+1/2})/2, v_{n+1/2} formed from the forces]
 //   commit()   integration pass in place (each particle checked against its anchor's reach), detect blow-ups
@@ -65,7 +66,18 @@ struct DemSettings {
   bool per_particle_drive = false;  // coupled runs: particles().a_ext replaces `drive`
   double overlap_limit = 0.25; // relative overlap (of the diameter) taken as a blow-up
   std::int64_t sort_interval_steps = 1000;
-  std::vector<double> slab_lower_bounds;  // empty: equal slabs; else one per rank (fluid grid rows)
+  std::vector<double> slab_lower_bounds;  // the first slabs: empty, equal slabs; else one lower bound per rank
+  // Balanced slabs (issue 25; the run driver's choice): at each full rebuild, before the migration, the slabs'
+  // bounds are set so that every rank has about as much work: quantiles of a global histogram of y in which each
+  // particle weighs 1 + 4 (m - 1), m the particles of its rank in its cell of a coarse grid of cells one cutoff
+  // (d + the largest pair skin allowed) wide -- its expected list entries, a sphere of the cutoff holding about 4
+  // cells. Each slab at least min(d + 2 x the largest pair skin allowed, L_y / ranks) high (the ghost shell, also of
+  // a restart between rebuilds). The trajectories do not depend on the bounds (newton off, sums in partner-id
+  // order): bit for bit the same at any rank count, with or without balancing. The coupled results are not: each
+  // rank's share of the deposit sums depends on which particles it owns, so the bounds are a function of the
+  // positions at the rebuild alone (not of the lists, whose first build after a restart is wider), and a restart
+  // that restores the bounds in force reproduces them at every later rebuild. false: the first slabs stay.
+  bool balance_slabs = false;
 };
 
 /// Global diagnostics of step n (reduced over ranks), from the synchronous velocities.
@@ -129,6 +141,12 @@ class DemSystem {
   }
   const DemSettings& settings() const { return s_; }
   const SlabDecomposition& slabs() const { return slabs_; }
+  /// The lower y bound of every rank's slab in force (a checkpoint keeps them: a restart between rebuilds
+  /// needs the slabs its particles and anchors belong to).
+  const std::vector<double>& slab_bounds() const { return slabs_.lower_bounds(); }
+  /// Restart at the checkpoint's rank count: the slabs in force when it was written (before set_particles).
+  /// InputError if a slab is thinner than the contact cutoff.
+  void set_slab_bounds(const std::vector<double>& lower_bounds);
   std::int64_t step_index() const { return step_; }
   /// Per owned particle: its position at the last full rebuild and how far it may move from it before the
   /// list must be rebuilt (x, y, z, reach; m, as floats, rounded so that the predicate stays conservative).
@@ -157,6 +175,10 @@ class DemSystem {
 
  private:
   void full_rebuild();
+  /// balance_slabs: new slab bounds from the owned particles' (wrapped) heights, the same on every rank. Collective.
+  void balance_slabs();
+  static constexpr int kBalanceBins = 4096;  // of the histogram of y (the bound within a bin is interpolated)
+  static constexpr double kBalanceCells = 1 << 22;  // at most, of the coarse grid that weights the particles
   /// Ghosts and list; `mid_interval` (a restart between rebuilds): every particle may already have moved up to
   /// its reach from its anchor, so the pairs are listed at d + 2 skin (each side 2 x the largest half-skin).
   void build_ghosts_and_list(bool mid_interval);
@@ -189,6 +211,7 @@ class DemSystem {
   double last_max_overlap_rel_ = 0;
   double skin_m_ = 0, skin_min_m_ = 0, skin_max_m_ = 0;  // largest pair skin of the list; adaptive bounds
   double thinnest_slab_m_ = 0;                           // of all ranks (the ghost shell's limit)
+  double min_slab_m_ = 0;                                // balance_slabs: no slab thinner than this
   double anchor_margin_m_ = 0;                           // covers the float rounding of an anchor
   std::vector<float> anchor_;                            // per owned particle: x, y, z at the build, reach
   std::vector<float> half_skin_;                         // per owned particle and ghost, for a list build

@@ -4,8 +4,8 @@
 // Cells (i, j, k) along (x, y, z), y vertical. The slabs are FFTW-MPI's blocks of the first array
 // dimension, which is y: fields are stored with y slowest, index (j, k, i), x fastest, so every rank's
 // slab is one contiguous range of FFTW's real array and the pressure solver's FFT needs no copy in y.
-// A rank owns cell rows j in [j0, j0 + ny_local); the particle side sets its slab to match,
-// [y_lo, y_hi) = [j0 h_y, (j0 + ny_local) h_y).
+// A rank owns cell rows j in [j0, j0 + ny_local), [y_lo, y_hi) = [j0 h_y, (j0 + ny_local) h_y). The particles'
+// slabs are their own (balanced, sim/dem/system.hpp); the coupler works on the whole grid (sim/coupling/exchange.hpp).
 //
 // Storage of a field: (ny_local + 2 g) planes of nz * nx values; local row j runs from -g to
 // ny_local + g - 1, rows outside [0, ny_local) being ghost copies of the neighbouring slabs
@@ -53,8 +53,8 @@ class FluidGrid {
   /// if a rank would own fewer than kGhost rows of y (n_y too small for the number of ranks).
   FluidGrid(MPI_Comm comm, std::array<int, 3> cells, std::array<double, 3> box_m);
 
-  /// The y-rows FFTW-MPI gives this rank for an (n_y, n_z, n_x) real array (r2c, transposed output):
-  /// the particle side calls this before any grid exists to place its slab boundaries at j0 h_y.
+  /// The y-rows FFTW-MPI gives this rank for an (n_y, n_z, n_x) real array (r2c, transposed output), before
+  /// any grid exists.
   static SlabRows fftw_slab_rows(MPI_Comm comm, std::array<int, 3> cells);
 
   MPI_Comm comm() const { return comm_; }

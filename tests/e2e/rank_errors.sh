@@ -1,10 +1,10 @@
 #!/usr/bin/env bash
-# An error on one rank ends the whole run (issue 10, item 2): at 3 ranks with slabs of unequal height, each
+# An error on one rank ends the whole run (issue 10, item 2): at 3 ranks, each
 # error below ends the job within seconds -- never a hang (every run has a timeout) -- with exit status 2
 # (bad input) or 1 (run failure) and a message that says what failed (and, when only some ranks failed,
 # which rank). Before, each left the other ranks waiting in a collective forever:
-#   * a slab thinner than the contact cutoff on the uneven FFTW blocks (only the thin rank threw; now the
-#     thinnest slab is agreed on: sim/dem/system.cpp);
+#   * a slab thinner than the contact cutoff (when the DEM slabs were the uneven FFTW blocks, only the thin rank
+#     threw; now the thinnest slab is agreed on: sim/dem/system.cpp; the slabs start equal and are balanced later);
 #   * a file operation of rank 0 (scene.toml, DONE, run.xmf; now its outcome is broadcast: sim/run.cpp
 #     on_rank0);
 #   * a read error on restart (an unreadable checkpoint);
@@ -23,9 +23,9 @@ failures=0
 SCENE=${CGD_SOURCE_DIR:?}/tests/scenes/small_suspension.toml
 small=(--set particles.solids_fraction=0.05 --set particles.velocity_rms=0 --set run.end_time=0.001
        --set run.dump_interval=0)
-# 4 x 4 x 4 d_p with cells of d_p/2: 8 y-rows, FFTW blocks 3 + 3 + 2 on 3 ranks; the 2-row slab (1 d_p) is
-# below the contact cutoff (1.15 d_p), the 3-row ones are not
-thin=("$SCENE" "${small[@]}" --set 'domain.size_dp=[4,4,4]' --set fluid.dx_over_dp=0.5)
+# 4 x 4 x 4 d_p with cells of d_p/2: 8 y-rows, FFTW blocks 3 + 3 + 2 on 3 ranks (enough for the fluid); the
+# particles' slabs, L_y / 3 = 1.33 d_p, are below the contact cutoff with a fixed skin of 0.5 d_p (1.5 d_p)
+thin=("$SCENE" "${small[@]}" --set 'domain.size_dp=[4,4,4]' --set fluid.dx_over_dp=0.5 --set contact.skin_over_dp=0.5)
 # 8 x 12 x 8 d_p, cells of d_p: 12 rows, 4 + 4 + 4 (3 ranks); runs of 400 DEM steps
 ok=("$SCENE" "${small[@]}" --set 'domain.size_dp=[8,12,8]' --set fluid.dx_over_dp=1.0)
 

@@ -1,6 +1,6 @@
 // A coupled CFD-DEM run (cgd::run_scene) on all ranks of MPI_COMM_WORLD agrees with the same run on one
 // rank (rank 0, MPI_COMM_SELF) to round-off, not bit for bit: the fluid's FFTs and global sums (PCG dot
-// products, averages) and the coupling's ghost-plane accumulation add in a different order on slabs
+// products, averages) and the coupling's sum of the ranks' deposits add in a different order on slabs
 // (sim/fluid/solver.hpp: 4e-15 per fluid step). Differences start at ~1e-16 and are amplified by
 // collisions (chaotic) -- measured on this scene, 1 vs 2 ranks, max |dx|/d_p: 2.9e-14 after 2.5 ms
 // (~9 fluid steps), 3.2e-13 after 5 ms, 2.1e-12 after 10 ms, 3.3e-11 after 20 ms, 2.9e-10 after 40 ms
@@ -9,6 +9,10 @@
 // with 3.) The test runs 5 ms (~18 fluid steps, 829 DEM steps) and requires <= 1e-9 d_p, 3000 times the
 // measured difference, so a real decomposition error (a missing ghost contribution, a particle deposited
 // twice) shows at O(1e-3) and fails. At 1 rank WORLD is SELF: bit for bit.
+// The DEM slabs are balanced at every list rebuild (sim/dem/system.hpp), not the fluid's FFTW rows, and the
+// coupler's grid is whole on every rank (sim/coupling/coupler.hpp): the runs on N ranks also check, from their
+// final checkpoint, that the slabs in force hold about equal shares of the particles (within 5 %; the FFTW rows of
+// this grid, 6 + 5 at 2 ranks, would give 55/45). A restart at N ranks between list rebuilds continues bit for bit.
 #include <gtest/gtest.h>
 #include <mpi.h>
 #include <stdlib.h>
@@ -130,6 +134,18 @@ std::string shared_temp_dir() {
   return base;
 }
 
+/// The DEM slabs of a run's checkpoint: the lower bounds in force and each rank's particles, and whether the
+/// list was due for a rebuild.
+struct CheckpointSlabs {
+  std::vector<double> bounds;
+  std::vector<std::int64_t> counts;
+  bool rebuild_due = false;
+};
+CheckpointSlabs read_slabs(const fs::path& run) {
+  cgd::h5::File f = cgd::h5::File::open_read((run / "checkpoint.h5").string(), MPI_COMM_SELF);
+  return {f.attr_doubles("/", "slab_bounds"), f.attr_ints("/", "rank_particle_counts"), f.attr_int("/", "rebuild_due") != 0};
+}
+
 /// `scene` on every rank of MPI_COMM_WORLD and on rank 0 alone, compared (see the top of this file).
 void compare_with_one_rank(const cgd::Scene& scene, const std::string& base, const char* label) {
   int rank = 0, size = 1;
@@ -174,6 +190,20 @@ void compare_with_one_rank(const cgd::Scene& scene, const std::string& base, con
         EXPECT_EQ(du, 0.0);
       }
     }
+    // balanced slabs: every rank's particles within 5 % of an equal share at the end (the slabs balance the
+    // expected list entries, which follow the particles in this gas; the FFTW rows would be 9 % off)
+    const CheckpointSlabs slabs = read_slabs(fs::path(base) / "world");
+    EXPECT_EQ(static_cast<int>(slabs.bounds.size()), size);
+    EXPECT_EQ(static_cast<int>(slabs.counts.size()), size);
+    std::int64_t n = 0;
+    for (std::int64_t c : slabs.counts) n += c;
+    std::printf("[ %s, %d ranks ] particles per rank:", label, size);
+    for (int r = 0; r < size && r < static_cast<int>(slabs.counts.size()); ++r) {
+      std::printf(" %lld (slab from %.2f d_p)", static_cast<long long>(slabs.counts[r]),
+                  slabs.bounds[r] / scene.particles.diameter_m);
+      EXPECT_NEAR(static_cast<double>(slabs.counts[r]), static_cast<double>(n) / size, 0.05 * n / size) << "rank " << r;
+    }
+    std::printf("\n");
     failed = ::testing::Test::HasFailure() ? 1 : 0;
     std::error_code ec;
     fs::remove_all(base, ec);
@@ -191,7 +221,7 @@ TEST(CoupledMpi, AnyRankCountAgreesWithOneRank) {
 }
 
 // The drift-velocity law (fluid.drag = "drift"): its cell-mean velocity is deposited with the coupler's weights in
-// the particles' order and its ghost planes accumulated as phi's, so slabs change only the order of the same sums:
+// the particles' order and summed over the ranks as phi's, so slabs change only the order of the same sums:
 // 1 vs N ranks agree to the round-off bound of the test above (not bit for bit: the fluid's FFTs and sums differ
 // with the slabs, as for every law), and at one rank bit for bit. A table that varies with phi and the cell slip.
 TEST(CoupledMpi, DriftLawAgreesWithOneRank) {
@@ -207,6 +237,64 @@ TEST(CoupledMpi, DriftLawAgreesWithOneRank) {
   const cgd::Scene scene = cgd::load_scene_from_string(
       kScene, "coupled_mpi_drift.toml", {"fluid.drag=\"drift\"", "fluid.drag_model=\"" + table + "\""});
   compare_with_one_rank(scene, base, "drift law");
+}
+
+// A restart between list rebuilds on all ranks continues bit for bit (the slabs in force are in the checkpoint,
+// sim/run_checkpoint.cpp; without them the ranks' particles would not match their slabs, or a rebuild at the restart
+// would wrap positions at another step): the run to 5 ms against the run to 2.5 ms continued to 5 ms, with
+// snapshots every 2.5 ms in both (the fluid steps are laid out per snapshot interval, so both do the same steps).
+TEST(CoupledMpi, RestartBetweenRebuildsContinuesBitForBit) {
+  int rank = 0, size = 1;
+  MPI_Comm_rank(MPI_COMM_WORLD, &rank);
+  MPI_Comm_size(MPI_COMM_WORLD, &size);
+  const std::string base = shared_temp_dir();
+  ASSERT_FALSE(base.empty());
+  const cgd::Scene full = cgd::load_scene_from_string(kScene, "coupled_mpi.toml", {"run.dump_interval=0.0025"});
+  const cgd::Scene half =
+      cgd::load_scene_from_string(kScene, "coupled_mpi.toml", {"run.dump_interval=0.0025", "run.end_time=0.0025"});
+  const fs::path a = fs::path(base) / "uninterrupted", b = fs::path(base) / "restarted";
+  run_quietly(full, a, MPI_COMM_WORLD);
+  run_quietly(half, b, MPI_COMM_WORLD);
+  int between = 0;
+  if (rank == 0) {
+    const CheckpointSlabs slabs = read_slabs(b);
+    between = slabs.rebuild_due ? 0 : 1;
+    std::printf("[ restart, %d ranks ] checkpoint at 2.5 ms: rebuild due %d, slab bounds", size, slabs.rebuild_due ? 1 : 0);
+    for (double y : slabs.bounds) std::printf(" %.3f d_p", y / full.particles.diameter_m);
+    std::printf("\n");
+  }
+  MPI_Bcast(&between, 1, MPI_INT, 0, MPI_COMM_WORLD);
+  EXPECT_EQ(between, 1) << "the checkpoint should fall between list rebuilds (the case under test)";
+  {
+    cgd::RunSettings rs;
+    rs.output_dir = b.string();
+    rs.quiet = true;
+    rs.restart = true;
+    std::ostringstream sink;
+    std::streambuf* old = std::cout.rdbuf(sink.rdbuf());
+    try {
+      cgd::run_scene(full, rs, MPI_COMM_WORLD);
+    } catch (...) {
+      std::cout.rdbuf(old);
+      throw;
+    }
+    std::cout.rdbuf(old);
+  }
+  int failed = 0;
+  if (rank == 0) {
+    const Final x = read_final(a), y = read_final(b);
+    EXPECT_EQ(x.step, y.step);
+    EXPECT_TRUE(x.x == y.x) << "positions differ: max " << (x.x.size() == y.x.size() ? max_diff(x.x, y.x) : -1.0);
+    EXPECT_TRUE(x.v == y.v) << "velocities differ: max " << (x.v.size() == y.v.size() ? max_diff(x.v, y.v) : -1.0);
+    EXPECT_TRUE(x.u == y.u) << "fluid velocities differ";
+    EXPECT_TRUE(x.p == y.p) << "pressures differ";
+    EXPECT_TRUE(x.eps == y.eps) << "void fractions differ";
+    failed = ::testing::Test::HasFailure() ? 1 : 0;
+    std::error_code ec;
+    fs::remove_all(base, ec);
+  }
+  MPI_Bcast(&failed, 1, MPI_INT, 0, MPI_COMM_WORLD);
+  EXPECT_EQ(failed, 0);
 }
 
 }  // namespace

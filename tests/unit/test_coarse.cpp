@@ -78,13 +78,14 @@ TEST(CoarseChecks, RefusesParcelsWiderThanACellTooFewParcelsThinSlabsAndAnEmptyW
   refused(std::string(seven).replace(seven.find("solids_fraction = 0.05"), 22, "solids_fraction = 0.02"), 1,
           "at least 100");  // 40 parcels
   refused(coarse_scene("", "", "sampling_start_tref = 25"), 1, "must be before run.end_time");
-  // 24 rows over 13 ranks: the thinnest slab is 1 row = 7.5 d_p, the cutoff of 7 d_p parcels with a fixed
-  // skin of 0.15 parcel diameters 8.05 d_p; the adaptive skin (no skin_over_dp) needs only 7 x 1.05 = 7.35 d_p
-  // (its largest skin is then bounded by the slab: sim/dem/system.hpp)
+  // 24 rows of 7.5 d_p over 23 ranks: the particles' slabs are L_y / 23 = 7.83 d_p (balanced later, none
+  // thinner), the cutoff of 7 d_p parcels with a fixed skin of 0.15 parcel diameters 8.05 d_p; the adaptive skin
+  // (no skin_over_dp) needs only 7 x 1.05 = 7.35 d_p (its largest skin is then bounded by the slab:
+  // sim/dem/system.hpp). (The fluid grid refuses fewer than 2 rows per rank on its own, at the run's start.)
   std::string dense = std::string(seven).replace(seven.find("solids_fraction = 0.05"), 22, "solids_fraction = 0.30");
-  EXPECT_NO_THROW(coarse::check_coarse_scene(load_scene_from_string(dense, "adaptive.toml"), 13));
+  EXPECT_NO_THROW(coarse::check_coarse_scene(load_scene_from_string(dense, "adaptive.toml"), 23));
   dense.replace(dense.find("gamma_star = 3e-3"), 17, "gamma_star = 3e-3\nskin_over_dp = 0.15");
-  refused(dense, 13, "thinner than the contact cutoff");
+  refused(dense, 23, "thinner than the contact cutoff");
 }
 
 }  // namespace

@@ -405,6 +405,7 @@ TEST_F(OutputTest, CheckpointRoundTripKeepsRunStateParticlesContactsAndFluid) {
   state.rebuild_due = true;
   state.last_sort_step = 1000;
   state.neighbor_rebuilds = 17;
+  state.slab_bounds = {0.0};  // one rank
   state.wall_seconds = 42.5;
   state.phase_seconds = {1.0, 2.0, 3.5};
   state.frames = {{0, 0.0, 3}, {1000, 1000 * 7.18e-7, 3}};
@@ -434,6 +435,7 @@ TEST_F(OutputTest, CheckpointRoundTripKeepsRunStateParticlesContactsAndFluid) {
   EXPECT_TRUE(back.rebuild_due);
   EXPECT_EQ(back.last_sort_step, 1000);
   EXPECT_EQ(back.neighbor_rebuilds, 17);
+  EXPECT_EQ(back.slab_bounds, std::vector<double>{0.0});
   EXPECT_EQ(back.wall_seconds, 42.5);
   EXPECT_EQ(back.phase_seconds, state.phase_seconds);
   ASSERT_EQ(back.frames.size(), 2u);

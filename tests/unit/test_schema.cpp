@@ -65,7 +65,7 @@ TEST(SchemaFormat, EveryFormatButTheCheckpointIsUnsealedAndAtItsVersion) {
   EXPECT_EQ(cgd::schema::kFiltered.version, 2);
   EXPECT_EQ(cgd::schema::kDragModel.version, 2);
   EXPECT_TRUE(cgd::schema::kCheckpoint.sealed);
-  EXPECT_EQ(cgd::schema::kCheckpoint.version, 3);  // 3: the neighbour-list anchors (issue 25)
+  EXPECT_EQ(cgd::schema::kCheckpoint.version, 4);  // 3: the neighbour-list anchors, 4: the DEM slab bounds (issue 25)
   EXPECT_EQ(cgd::schema::kCheckpoint.oldest_version, 1);
 }
 
@@ -77,7 +77,7 @@ TEST(SchemaFormat, RefusesAnotherFormatAndAVersionItDoesNotReadNamingThem) {
       << newer;
   EXPECT_NE(newer.find("newer cgd"), std::string::npos) << newer;
   const std::string older = refusal(stamped(dir, "older.h5", "checkpoint", 0), cgd::schema::kCheckpoint);
-  EXPECT_NE(older.find("checkpoints of versions 1 to 3"), std::string::npos) << older;
+  EXPECT_NE(older.find("checkpoints of versions 1 to 4"), std::string::npos) << older;
   const std::string other = refusal(stamped(dir, "series.h5", "series", 1), cgd::schema::kSnapshot);
   EXPECT_NE(other.find("cgd_format = \"series\": not a snapshot"), std::string::npos) << other;
 }
