@@ -24,20 +24,21 @@ RowOwners RowOwners::gather(MPI_Comm comm, int j0, int count) {
   return r;
 }
 
-void fold_ghost_rows(const GridView& g, double* field, int k) {
-  const std::size_t K = static_cast<std::size_t>(k);
-  const std::size_t block = g.plane() * static_cast<std::size_t>(g.ghost) * K;
-  double* lower_ghosts = field + K * g.index(0, -g.ghost, 0);
-  double* upper_ghosts = field + K * g.index(0, g.ny_local, 0);
-  double* bottom_rows = field + K * g.index(0, 0, 0);
-  double* top_rows = field + K * g.index(0, g.ny_local - g.ghost, 0);
-  for (std::size_t m = 0; m < block; ++m) top_rows[m] += lower_ghosts[m];
-  for (std::size_t m = 0; m < block; ++m) bottom_rows[m] += upper_ghosts[m];
-  std::fill(lower_ghosts, lower_ghosts + block, 0.0);
-  std::fill(upper_ghosts, upper_ghosts + block, 0.0);
-}
-
 namespace {
+
+/// The four blocks of `ghost` planes at the y ends of a field of `k` values per cell on the whole view: the ghost
+/// planes below and above, and the owned rows they are periodic copies of (the top rows, the bottom rows).
+struct EdgeBlocks {
+  std::size_t size;  // doubles per block
+  double *lower_ghosts, *upper_ghosts, *bottom_rows, *top_rows;
+};
+
+EdgeBlocks edge_blocks(const GridView& g, double* field, int k) {
+  const std::size_t K = static_cast<std::size_t>(k);
+  return {g.plane() * static_cast<std::size_t>(g.ghost) * K, field + K * g.index(0, -g.ghost, 0),
+          field + K * g.index(0, g.ny_local, 0), field + K * g.index(0, 0, 0),
+          field + K * g.index(0, g.ny_local - g.ghost, 0)};
+}
 
 /// Counts and displacements (in doubles, from row 0) of every rank's rows of a k-valued field.
 void row_blocks(const GridView& g, const RowOwners& rows, int k, std::vector<int>& counts, std::vector<int>& displs) {
@@ -51,6 +52,14 @@ void row_blocks(const GridView& g, const RowOwners& rows, int k, std::vector<int
 }
 
 }  // namespace
+
+void fold_ghost_rows(const GridView& g, double* field, int k) {
+  const EdgeBlocks e = edge_blocks(g, field, k);
+  for (std::size_t m = 0; m < e.size; ++m) e.top_rows[m] += e.lower_ghosts[m];
+  for (std::size_t m = 0; m < e.size; ++m) e.bottom_rows[m] += e.upper_ghosts[m];
+  std::fill(e.lower_ghosts, e.lower_ghosts + e.size, 0.0);
+  std::fill(e.upper_ghosts, e.upper_ghosts + e.size, 0.0);
+}
 
 void reduce_rows_to_owners(MPI_Comm comm, const GridView& g, const RowOwners& rows, double* field, int k) {
   int rank = 0, size = 1;
@@ -74,14 +83,9 @@ void gather_rows(MPI_Comm comm, const GridView& g, const RowOwners& rows, double
     double* first_row = field + static_cast<std::size_t>(k) * g.index(0, 0, 0);
     MPI_Allgatherv(MPI_IN_PLACE, 0, MPI_DATATYPE_NULL, first_row, counts.data(), displs.data(), MPI_DOUBLE, comm);
   }
-  const std::size_t K = static_cast<std::size_t>(k);
-  const std::size_t block = g.plane() * static_cast<std::size_t>(g.ghost) * K;
-  double* lower_ghosts = field + K * g.index(0, -g.ghost, 0);
-  double* upper_ghosts = field + K * g.index(0, g.ny_local, 0);
-  const double* bottom_rows = field + K * g.index(0, 0, 0);
-  const double* top_rows = field + K * g.index(0, g.ny_local - g.ghost, 0);
-  std::copy(top_rows, top_rows + block, lower_ghosts);
-  std::copy(bottom_rows, bottom_rows + block, upper_ghosts);
+  const EdgeBlocks e = edge_blocks(g, field, k);
+  std::copy(e.top_rows, e.top_rows + e.size, e.lower_ghosts);
+  std::copy(e.bottom_rows, e.bottom_rows + e.size, e.upper_ghosts);
 }
 
 }  // namespace cgd::coupling

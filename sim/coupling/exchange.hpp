@@ -90,6 +90,14 @@ inline int wrap_index(int i, int n) {
   return ((i % n) + n) % n;
 }
 
+/// A kept stencil's three cells along x and along z, wrapped into the periodic grid.
+inline void stencil_columns(const GridView& g, const Stencil& st, int ix[3], int iz[3]) {
+  for (int a = 0; a < 3; ++a) {
+    ix[a] = wrap_index(st.first[0] + a, g.cells[0]);
+    iz[a] = wrap_index(st.first[2] + a, g.cells[2]);
+  }
+}
+
 /// for_each_tsc_cell from a kept stencil: the same cells, order and weights, bit for bit.
 template <class F>
 inline void for_each_stencil_cell(const GridView& g, const Stencil& st, F&& f) {
@@ -98,10 +106,7 @@ inline void for_each_stencil_cell(const GridView& g, const Stencil& st, F&& f) {
   stencil_weights(st.d[1], wy);
   stencil_weights(st.d[2], wz);
   int ix[3], iz[3];
-  for (int a = 0; a < 3; ++a) {
-    ix[a] = wrap_index(st.first[0] + a, g.cells[0]);
-    iz[a] = wrap_index(st.first[2] + a, g.cells[2]);
-  }
+  stencil_columns(g, st, ix, iz);
   for (int c = 0; c < 3; ++c)
     for (int b = 0; b < 3; ++b) {
       const double wyz = wy[b] * wz[c];
@@ -124,10 +129,7 @@ inline void for_each_stencil_cell_gradient(const GridView& g, const Stencil& st,
     dw[a][2] = (0.5 + st.d[a]) / g.spacing[a];
   }
   int ix[3], iz[3];
-  for (int a = 0; a < 3; ++a) {
-    ix[a] = wrap_index(st.first[0] + a, g.cells[0]);
-    iz[a] = wrap_index(st.first[2] + a, g.cells[2]);
-  }
+  stencil_columns(g, st, ix, iz);
   for (int c = 0; c < 3; ++c)
     for (int b = 0; b < 3; ++b) {
       const std::size_t row = g.index(0, st.first[1] + b, iz[c]);
