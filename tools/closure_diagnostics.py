@@ -108,7 +108,8 @@ def overlap_matrix(n_fine, h_fine, origin, n_coarse, h_coarse):
 
 def snapshot_cells(path, n_cells, from_tref):
     """Per coarse cell of one snapshot: solids volume, particle volume x velocity (y), fluid <eps> and <eps u_y>
-    volumes; and the run's constants. None for a snapshot before from_tref t_ref (its arrays are not read)."""
+    volumes; the run's constants and the snapshot's time (s). None for a snapshot before from_tref t_ref (its
+    arrays are not read)."""
     try:
         f = h5py.File(path, "r")
     except OSError as e:
@@ -116,7 +117,8 @@ def snapshot_cells(path, n_cells, from_tref):
     with f:
         if "time" not in f.attrs or "params" not in f or "t_ref_s" not in f["params"].attrs:
             fail(f"{path}: no time attribute or /params@t_ref_s: not a cgd snapshot")
-        if not float(f.attrs["time"]) >= from_tref * float(f["params"].attrs["t_ref_s"]) * (1 - 1e-9):
+        time = float(f.attrs["time"])
+        if not time >= from_tref * float(f["params"].attrs["t_ref_s"]) * (1 - 1e-9):
             return None
         if f.attrs.get("cgd_format") not in ("snapshot", b"snapshot"):
             fail(f"{path}: cgd_format is {f.attrs.get('cgd_format')!r}, expected 'snapshot'")
@@ -153,7 +155,7 @@ def snapshot_cells(path, n_cells, from_tref):
         vol = alpha ** 3 * float(p["particle_volume_m3"])
         consts = dict(box=box, u_t=float(p["u_t_m_s"]), t_ref=float(p["t_ref_s"]), rho_p=float(p["density_kg_m3"]),
                       rho_f=float(p["fluid_density_kg_m3"]), g=abs(float(np.asarray(p["gravity_m_s2"])[1])),
-                      vol=vol)
+                      vol=vol, time=time)
     # N cells across x, the same size along z (N x Lz/Lx), and the nearest whole number along y: the coarse
     # grid the engine makes of fluid.dx_over_dp = Lx/N (the half box's 53 x 213 x 53 d_p: 4 x 16 x 4 cells of
     # 13.25 x 13.31 x 13.25 d_p)

@@ -19,7 +19,6 @@ import collections
 import os
 import sys
 
-import h5py
 import numpy as np
 
 import closure_diagnostics as cd
@@ -41,8 +40,7 @@ def profile(run, n_cells, from_tref):
         spread.append(phi.std(axis=(0, 2)).mean())
         cmax = max(cmax, phi.max())
         last = layers
-        with h5py.File(path, "r") as f:  # snapshot_cells checked time and t_ref
-            history.append((float(f.attrs["time"]) / snap["t_ref"], float(dens[-1]), float(spread[-1]), layers))
+        history.append((snap["time"] / snap["t_ref"], float(dens[-1]), float(spread[-1]), layers))
     if not dens:
         return None
     return Profile(len(dens), float(np.mean(dens)), float(np.mean(spread)), float(cmax), last, history)

@@ -22,9 +22,7 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
-#include <iostream>
 #include <numeric>
-#include <sstream>
 #include <string>
 #include <vector>
 
@@ -265,21 +263,7 @@ TEST(CoupledMpi, RestartBetweenRebuildsContinuesBitForBit) {
   }
   MPI_Bcast(&between, 1, MPI_INT, 0, MPI_COMM_WORLD);
   EXPECT_EQ(between, 1) << "the checkpoint should fall between list rebuilds (the case under test)";
-  {
-    cgd::RunSettings rs;
-    rs.output_dir = b.string();
-    rs.quiet = true;
-    rs.restart = true;
-    std::ostringstream sink;
-    std::streambuf* old = std::cout.rdbuf(sink.rdbuf());
-    try {
-      cgd::run_scene(full, rs, MPI_COMM_WORLD);
-    } catch (...) {
-      std::cout.rdbuf(old);
-      throw;
-    }
-    std::cout.rdbuf(old);
-  }
+  run_quietly(full, b, MPI_COMM_WORLD, /*restart=*/true);
   int failed = 0;
   if (rank == 0) {
     const Final x = read_final(a), y = read_final(b);

@@ -105,6 +105,15 @@ std::map<std::int64_t, std::array<double, 9>> run(MPI_Comm comm, const DemSettin
   return out;
 }
 
+/// The particles whose state (x, v, w) differs in any bit between two runs' results (`serial`'s ids).
+std::int64_t differing_particles(const std::map<std::int64_t, std::array<double, 9>>& serial,
+                                 const std::map<std::int64_t, std::array<double, 9>>& parallel) {
+  std::int64_t differing = 0;
+  for (const auto& [id, a] : serial)
+    if (a != parallel.at(id)) ++differing;
+  return differing;
+}
+
 TEST(DemMpi, SlabDecompositionMatchesSerialRunBitForBit) {
   const double d = 75e-6;
   // 12 x 24 x 12 d at solids fraction 0.3 with rms speed 0.5 m/s: many frictional contacts,
@@ -158,9 +167,7 @@ TEST(DemMpi, UnevenSlabsAndLongMigrationsMatchSerialRunBitForBit) {
   const auto serial = run(MPI_COMM_SELF, serial_settings, pl, 600);
   ASSERT_EQ(parallel.size(), static_cast<std::size_t>(n));
   ASSERT_EQ(serial.size(), static_cast<std::size_t>(n));
-  std::int64_t differing = 0;
-  for (const auto& [id, a] : serial)
-    if (a != parallel.at(id)) ++differing;
+  const std::int64_t differing = differing_particles(serial, parallel);
   EXPECT_EQ(differing, 0) << "of " << n << " particles after 600 steps on " << size << " uneven slabs";
 }
 
@@ -192,9 +199,7 @@ TEST(DemMpi, AdaptiveSkinMatchesSerialRunBitForBit) {
   const auto serial = run(MPI_COMM_SELF, adaptive, pl, 600, false, &serial_book);
   run(MPI_COMM_SELF, fixed, pl, 600, false, &fixed_book);
   ASSERT_EQ(parallel.size(), static_cast<std::size_t>(n));
-  std::int64_t differing = 0;
-  for (const auto& [id, a] : serial)
-    if (a != parallel.at(id)) ++differing;
+  const std::int64_t differing = differing_particles(serial, parallel);
   EXPECT_EQ(differing, 0) << "of " << n << " particles";
   EXPECT_EQ(parallel_book.rebuilds, serial_book.rebuilds);
   EXPECT_EQ(parallel_book.skin_m, serial_book.skin_m);
@@ -245,9 +250,7 @@ TEST(DemMpi, BalancedMovingSlabsMatchSerialRunBitForBit) {
   const auto serial = run(MPI_COMM_SELF, s, pl, 1000);
   ASSERT_EQ(parallel.size(), static_cast<std::size_t>(n));
   ASSERT_EQ(serial.size(), static_cast<std::size_t>(n));
-  std::int64_t differing = 0;
-  for (const auto& [id, a] : serial)
-    if (a != parallel.at(id)) ++differing;
+  const std::int64_t differing = differing_particles(serial, parallel);
   EXPECT_EQ(differing, 0) << "of " << n << " particles after 1000 steps on " << size << " balanced slabs ("
                           << bound_sets.size() << " sets of bounds)";
 }

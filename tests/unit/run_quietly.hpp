@@ -13,12 +13,14 @@
 
 namespace cgd::testing {
 
-/// Runs `scene` into `output_dir` on `comm` (collective), quietly; exceptions propagate with std::cout
-/// restored.
-inline void run_quietly(const Scene& scene, const std::filesystem::path& output_dir, MPI_Comm comm) {
+/// Runs `scene` into `output_dir` on `comm` (collective), quietly (`restart`: continued from the directory's
+/// checkpoint, as --restart); exceptions propagate with std::cout restored.
+inline void run_quietly(const Scene& scene, const std::filesystem::path& output_dir, MPI_Comm comm,
+                        bool restart = false) {
   RunSettings rs;
   rs.output_dir = output_dir.string();
   rs.quiet = true;
+  rs.restart = restart;
   std::ostringstream sink;
   std::streambuf* old = std::cout.rdbuf(sink.rdbuf());
   try {
