@@ -5,7 +5,9 @@
 //               partners' positions prefetched a few entries ahead and the rows' positions a few rows
 //               ahead (both were the pass's cache misses; velocities and spins are read only where a
 //               pair touches, which few list entries do); each particle's force (and torque) is summed
-//               in its list's canonical order and stored per row, one sequential stream;
+//               in its list's canonical order and stored per row, one sequential stream. With friction
+//               the touching entries are gathered in batches and the law is evaluated four at a time
+//               (AVX2), bit for bit the scalar law (compute_forces_batched, issue 25);
 //   2. integrate a pass, in place, over the particles that must move this step (their state prefetched
 //               a few ahead; a particle's force is the next row's when it is that row, else zero): leapfrog
 //               (kick-drift, symplectic, second order)
@@ -82,12 +84,13 @@ inline double kick_drift(std::size_t i, double* x, double* v, V3 f, const Drive&
 /// w_{n+1/2} from the torque.
 inline V3 kicked_spin(V3 w, V3 torque, const KernelConstants& k) { return w + (k.dt * k.inv_inertia) * torque; }
 
-/// Pass 1: the force (and torque) on each particle of `rows` (particles with a non-empty list) from its
-/// list, in the list's order, into force[3 r..] (torque[3 r..] with friction) for row r: the forces are
-/// stored per row, a sequential stream, not per particle. Updates the tangential histories and the
-/// overlap statistics.
+/// Pass 1, entry by entry: the force (and torque) on each particle of `rows` (particles with a non-empty
+/// list) from its list, in the list's order, into force[3 r..] (torque[3 r..] with friction) for row r: the
+/// forces are stored per row, a sequential stream, not per particle. Updates the tangential histories and
+/// the overlap statistics. `compute_forces` (below) uses it for the frictionless law; for the frictional one
+/// it is the reference the batched pass is tested against, bit for bit.
 template <class Contact>
-void compute_forces(const Particles& p, NeighborList& list, const Contact& contact, const KernelConstants& k,
+void compute_forces_per_entry(const Particles& p, NeighborList& list, const Contact& contact, const KernelConstants& k,
                     const std::int32_t* rows, std::size_t n_rows, double* __restrict force,
                     double* __restrict torque_out, KernelStats& st) {
   constexpr bool kFriction = std::is_same_v<Contact, SpringDashpot<true>>;
@@ -176,6 +179,133 @@ void compute_forces(const Particles& p, NeighborList& list, const Contact& conta
     store3(force + 3 * r, f);
     if constexpr (kFriction) store3(torque_out + 3 * r, torque);
   }
+}
+
+/// Pass 1 with friction, the contact law evaluated in batches (issue 25): the same pass over the rows and
+/// their entries as `compute_forces_per_entry` (the same distance test, spring flags, zeroed springs and
+/// prefetches), in three steps per batch of touching entries:
+///   1. scan: each entry's dx, r2, partner and row go into the batch's next slot, and the slot is kept
+///      (the batch's count advances) only where the pair touches -- no branch on the test, whose outcome
+///      is as good as random in a dense state; the spring flags change under a branch only where a contact
+///      starts or ends (rare);
+///   2. when the batch is full (and after the last row) the gather: each kept entry's velocities, spins
+///      and spring, loads that no longer wait behind one another's branches;
+///   3. `SpringDashpot<true>::force_batch` evaluates the law over the batch, four entries per instruction,
+///      and the results are taken in the batch's order, which is the list's: the overlap statistic (the
+///      first largest overlap), each entry's force and torque added to its row's sums, its new spring
+///      written back.
+/// A row's sums start at +0.0 in the output arrays when the row is reached and may be added to over
+/// several batches (a row with more touching entries than a batch holds): the same additions in the same
+/// order as the per-entry pass's register sums, so force, torque, springs, flags and statistics are bit for
+/// bit those of `compute_forces_per_entry` (tests/unit/test_dem_batched_forces.cpp).
+template <std::size_t kBatch = 32>
+void compute_forces_batched(const Particles& p, NeighborList& list, const SpringDashpot<true>& contact,
+                            const KernelConstants& k, const std::int32_t* rows, std::size_t n_rows,
+                            double* __restrict force, double* __restrict torque_out, KernelStats& st) {
+  const double contact_dist = 2.0 * k.radius, contact_dist2 = contact_dist * contact_dist;
+  const double* __restrict x = p.x.data();
+  const double* __restrict v = p.v.data();
+  const double* __restrict w = p.w.data();
+  const std::int64_t* __restrict offset = list.offset.data();
+  std::int32_t* __restrict index = list.index.data();
+  double* __restrict spring = list.xi.data();
+  constexpr std::int32_t kMask = NeighborList::kPartnerMask;
+  const std::int64_t n_entries = static_cast<std::int64_t>(list.index.size());
+  constexpr std::int64_t kAhead = 32;  // as in compute_forces_per_entry
+  constexpr std::size_t kRowAhead = 4;
+  FrictionBatch<kBatch> batch;
+  const auto flush = [&] {
+    for (std::size_t b = 0; b < batch.count; ++b) {  // the gather
+      const std::size_t i = static_cast<std::size_t>(batch.i[b]), j = static_cast<std::size_t>(batch.j[b]);
+      const V3 dv = load3(v + 3 * i) - load3(v + 3 * j);
+      const V3 wi = load3(w + 3 * i), wj = load3(w + 3 * j), s = load3(spring + 3 * batch.entry[b]);
+      batch.dv[0][b] = dv.x, batch.dv[1][b] = dv.y, batch.dv[2][b] = dv.z;
+      batch.wi[0][b] = wi.x, batch.wi[1][b] = wi.y, batch.wi[2][b] = wi.z;
+      batch.wj[0][b] = wj.x, batch.wj[1][b] = wj.y, batch.wj[2][b] = wj.z;
+      batch.xi[0][b] = s.x, batch.xi[1][b] = s.y, batch.xi[2][b] = s.z;
+    }
+    contact.force_batch(batch, contact_dist, k.radius);
+    for (std::size_t b = 0; b < batch.count; ++b) {  // the results, in list order
+      if (batch.overlap[b] > st.max_overlap) {
+        st.max_overlap = batch.overlap[b];
+        st.overlap_particle = p.id[batch.i[b]];
+        st.overlap_partner = p.id[batch.j[b]];
+      }
+      double* fr = force + 3 * static_cast<std::size_t>(batch.row[b]);
+      double* tr = torque_out + 3 * static_cast<std::size_t>(batch.row[b]);
+      double* s = spring + 3 * batch.entry[b];
+      for (int c = 0; c < 3; ++c) {
+        fr[c] = fr[c] + batch.f[c][b];
+        tr[c] = tr[c] + batch.t[c][b];
+        s[c] = batch.xi[c][b];
+      }
+    }
+    batch.count = 0;
+  };
+  for (std::size_t r = 0; r < n_rows; ++r) {
+    const std::size_t i = static_cast<std::size_t>(rows[r]);
+    if (r + kRowAhead < n_rows) {
+      const std::size_t ia = 3 * static_cast<std::size_t>(rows[r + kRowAhead]);
+      __builtin_prefetch(x + ia);
+      __builtin_prefetch(x + ia + 2);
+    }
+    const V3 xi = load3(x + 3 * i);
+    store3(force + 3 * r, V3{0, 0, 0});
+    store3(torque_out + 3 * r, V3{0, 0, 0});
+    const std::int64_t k0 = offset[i], k1 = offset[i + 1];
+    for (std::int64_t e = k0; e < k1; ++e) {
+      if (e + kAhead < n_entries) {
+        const std::int32_t raw_n = index[e + kAhead];
+        const std::int32_t jn = raw_n & kMask;
+        __builtin_prefetch(x + 3 * jn);
+        __builtin_prefetch(x + 3 * jn + 2);
+        if (NeighborList::spring_flagged(raw_n)) {
+          const double* s = spring + 3 * (e + kAhead);
+          __builtin_prefetch(s);
+          __builtin_prefetch(s + 2);
+          __builtin_prefetch(v + 3 * jn);
+          __builtin_prefetch(v + 3 * jn + 2);
+          __builtin_prefetch(w + 3 * jn);
+          __builtin_prefetch(w + 3 * jn + 2);
+        }
+      }
+      const std::int32_t raw = index[e];
+      const std::int32_t j = raw & kMask;
+      const V3 dx = xi - load3(x + 3 * j);
+      const double r2 = dot(dx, dx);
+      const bool touching = !(r2 >= contact_dist2);  // as compute_forces_per_entry's test (a NaN touches)
+      if (touching != NeighborList::spring_flagged(raw)) {
+        if (touching) {
+          index[e] = NeighborList::with_spring_flag(raw);  // its spring may be non-zero from now on
+        } else {  // contact ended: its history goes with it
+          double* s = spring + 3 * e;
+          s[0] = s[1] = s[2] = 0.0;
+          index[e] = j;
+        }
+      }
+      const std::size_t b = batch.count;  // < kBatch: a full batch is flushed at once
+      batch.entry[b] = e;
+      batch.row[b] = static_cast<std::int32_t>(r);
+      batch.i[b] = static_cast<std::int32_t>(i);
+      batch.j[b] = j;
+      batch.r2[b] = r2;
+      batch.dx[0][b] = dx.x, batch.dx[1][b] = dx.y, batch.dx[2][b] = dx.z;
+      batch.count = b + touching;
+      if (batch.count == kBatch) flush();
+    }
+  }
+  if (batch.count > 0) flush();
+}
+
+/// Pass 1: `compute_forces_batched` for the frictional law, `compute_forces_per_entry` for the others.
+template <class Contact>
+void compute_forces(const Particles& p, NeighborList& list, const Contact& contact, const KernelConstants& k,
+                    const std::int32_t* rows, std::size_t n_rows, double* __restrict force,
+                    double* __restrict torque_out, KernelStats& st) {
+  if constexpr (std::is_same_v<Contact, SpringDashpot<true>>)
+    compute_forces_batched(p, list, contact, k, rows, n_rows, force, torque_out, st);
+  else
+    compute_forces_per_entry(p, list, contact, k, rows, n_rows, force, torque_out, st);
 }
 
 /// Pass 2: kick and drift the particles of `idx` in place from the forces of pass 1 (per row: `rows`, a
