@@ -130,10 +130,14 @@ def plot(a, b, labels, pairs, min_count, path):
     for ax in axes.flat[len(pairs):]:
         ax.set_visible(False)
     for ax, (na, nb) in zip(axes.flat, pairs):
+        shown = [0.0]  # the H values drawn: the axis is set by them, not by a sparse bin's wide band
         for g, label, colour in ((a[na], labels[0], "C0"), (b[nb], labels[1], "C1")):
             keep = (g["count"] >= min_count) & np.isfinite(g["H"])
             ax.fill_between(g["phi_mean"][keep], g["H_low"][keep], g["H_high"][keep], color=colour, alpha=0.25, lw=0)
             ax.plot(g["phi_mean"][keep], g["H"][keep], "o-", ms=2.5, color=colour, label=label)
+            shown.extend(g["H"][keep].tolist())
+        lo, hi = min(shown), max(max(shown), 1.0)
+        ax.set_ylim(lo - 0.1 * (hi - lo), hi + 0.1 * (hi - lo))
         top = max(float(np.nanmax(g["phi_mean"][g["count"] >= min_count], initial=0.0)) for g in (a[na], b[nb]))
         phi = np.linspace(0.005, max(0.05, top), 100)
         ax.plot(phi, radl2014(phi, a[na]["F"]), "k--", lw=1, label="Radl 2014")
