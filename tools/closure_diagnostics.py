@@ -81,7 +81,9 @@ import numpy as np
 
 
 def fail(msg):
-    print(f"closure_diagnostics.py: {msg}", file=sys.stderr)
+    """The message on stderr, prefixed with the running tool's name (this module's readers serve other tools too:
+    layer_profile.py, model_coverage.py), and exit status 2."""
+    print(f"{os.path.basename(sys.argv[0]) or 'closure_diagnostics.py'}: {msg}", file=sys.stderr)
     sys.exit(2)
 
 
