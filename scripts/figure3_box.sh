@@ -3,6 +3,7 @@
 # user can take from this repository beside each other, against the resolved runs of that box.
 #
 # usage: scripts/figure3_box.sh OUT [PHIS=0.02] [ALPHAS=2,3,4,6,8] [SEEDS=1,2,3] [CLOSURES=micro,radl,halfbox,perfect,model]
+#   (CLOSURES may also name modelraw)
 #   OUT: a `Makefile.pipeline PROFILE=$PROFILE` output directory with OUT/generate/phi<phi>/DONE for every phi.
 # Closures (the run directory's label):
 #   micro    the scene's micro law (Beetstra), no correction;
@@ -11,7 +12,10 @@
 #            another box (53 x 213 x 53 d_p), used here at the same F = L_char/Delta rule;
 #   perfect  the grid's own a-priori correction as a table in phi-bar (cgd-fit --grid-table CELLS of the run's own
 #            filtered file), c_corr off, as the pipeline's perfect runs;
-#   model    OUT/fit/model.h5 when it exists (the model fitted in this box, with its c_corr(alpha) if fitted).
+#   model    OUT/fit/model.h5 when it exists (the model fitted in this box, with the c_corr(alpha) in its file: the
+#            parcel fit's, or the paper's k = 0.05 when none was made);
+#   modelraw the same model with c_corr off (fluid.parcel_correction = false), as the half-box model is used (its
+#            c_corr is 1): the fair comparison of the two boxes' models when this box has no parcel fit.
 # Each on the grid of CELLS cells across (default 4: the paper's Figure 3 grid, 26.5 d_p in its box), sampled
 # 40-80 t_ref (a coarse grid seeds its clustering from little noise, as the half profile's COARSE_SET), then the
 # table of the slip error against each resolved run (tools/closure_wide_table.py) -> OUT/figure3_c<CELLS>/table.md.
@@ -48,8 +52,8 @@ for phi in "${phis[@]}"; do
   [ -f "$out/generate/phi$phi/DONE" ] || { echo "figure3_box.sh: $out/generate/phi$phi is not a finished run" >&2; exit 2; }
 done
 for c in "${closures[@]}"; do
-  case $c in micro | radl | halfbox | perfect | model) ;;
-    *) echo "figure3_box.sh: closure $c is not one of micro, radl, halfbox, perfect, model" >&2; exit 2 ;;
+  case $c in micro | radl | halfbox | perfect | model | modelraw) ;;
+    *) echo "figure3_box.sh: closure $c is not one of micro, radl, halfbox, perfect, model, modelraw" >&2; exit 2 ;;
   esac
 done
 
@@ -81,9 +85,10 @@ for phi in "${phis[@]}"; do
           radl) args=(--set fluid.drag=radl2014) ;;
           halfbox) args=(--model "$repo/data/models/half_box.h5") ;;
           perfect) args=(--model "$dir/perfect_phi$phi.h5" --set fluid.parcel_correction=false) ;;
-          model)
-            [ -f "$out/fit/model.h5" ] || { say "no $out/fit/model.h5: the model runs are left out"; continue; }
-            args=(--model "$out/fit/model.h5") ;;
+          model | modelraw)
+            [ -f "$out/fit/model.h5" ] || { say "no $out/fit/model.h5: the $c runs are left out"; continue; }
+            args=(--model "$out/fit/model.h5")
+            if [ "$c" = modelraw ]; then args+=(--set fluid.parcel_correction=false); fi ;;
         esac
         coarse_run "$dir/phi${phi}_a${alpha}_${c}_s$seed" "$phi" "$alpha" "$seed" "${args[@]}"
       done

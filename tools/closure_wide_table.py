@@ -35,6 +35,7 @@ LABELS = {
     "halfbox": "half-box model (data/models/half_box.h5)",
     "perfect": "perfect (the grid's own phi-bar table)",
     "model": "model fitted in this box",
+    "modelraw": "model fitted in this box, c_corr off",
 }
 
 
