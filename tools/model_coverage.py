@@ -1,7 +1,8 @@
 #!/usr/bin/python3
 """How much of a run lies where a drag model has data? A filtered drag model (cgd-fit's file, docs/schema-drag-model.md)
-is calibrated on filtered solids fractions phi_crit <= phi_bar <= phi_max and on cells of the calibrated widths; outside
-them it holds its end values (phi) or extrapolates 1/(1 + a F^n) (width). This tool reads a run's snapshots in its
+is calibrated on filtered solids fractions phi_crit <= phi_bar <= phi_max and on cells of the calibrated widths; below
+phi_crit it takes h linearly to 0 (a held), above phi_max it holds h and a at their end values, and outside the
+calibrated cells it extrapolates 1/(1 + a F^n). This tool reads a run's snapshots in its
 window and says which share of its particles (parcels) sat where no data stands behind the correction.
 
 phi_bar of a particle is what the engine's drag law sees: the cell solids fraction 1 - eps of the snapshot's fluid

@@ -141,6 +141,10 @@ bool same_value(double a, double b) {
 }
 
 TEST(DemBatchedForces, LawOnSpecialValuesEqualsTheScalarLaw) {
+#if !defined(__AVX2__)
+  // without AVX2 force_batch is the scalar law itself: the comparison would pass without testing anything
+  GTEST_SKIP() << "built without AVX2 (-march below x86-64-v3): force_batch is the scalar law";
+#endif
   const double inf = std::numeric_limits<double>::infinity(), nan = std::numeric_limits<double>::quiet_NaN();
   const double special[] = {0.0, -0.0, 1.0, -1.0, 0.5, 2.0, 1e-300, -1e-300, 1e300, inf, -inf, nan, 3.0, -3.0};
   std::mt19937_64 rng(11);
