@@ -84,6 +84,58 @@ inline double kick_drift(std::size_t i, double* x, double* v, V3 f, const Drive&
 /// w_{n+1/2} from the torque.
 inline V3 kicked_spin(V3 w, V3 torque, const KernelConstants& k) { return w + (k.dt * k.inv_inertia) * torque; }
 
+/// Prefetch distances of the force passes. In list entries: entries are contiguous over rows (CSR), so the
+/// look-ahead runs on into the next particles' lists. 32 (issue 17, third round): in the Table 1 box's own
+/// developed state (~1.2 entries per particle, lists of a 0.25 d skin) 8 left the partner's position a cache
+/// miss (force pass 17-19 -> 14.2-14.8 ns per particle-step; 64: no better). In rows: the row's own position.
+/// The three helpers below are [[gnu::always_inline]]: left to GCC 12's judgement they stayed out of line in the
+/// batched pass, whose force + integrate in the 0.30 plug then took 66 instead of 55 ns per particle-step.
+inline constexpr std::int64_t kForceEntryAhead = 32;
+inline constexpr std::size_t kForceRowAhead = 4;
+
+/// The force passes' look-ahead at row r: the position of the particle kForceRowAhead rows on.
+[[gnu::always_inline]] inline void prefetch_row_ahead(const std::int32_t* rows, std::size_t r, std::size_t n_rows, const double* x) {
+  if (r + kForceRowAhead < n_rows) {
+    const std::size_t ia = 3 * static_cast<std::size_t>(rows[r + kForceRowAhead]);
+    __builtin_prefetch(x + ia);
+    __builtin_prefetch(x + ia + 2);
+  }
+}
+
+/// The force passes' look-ahead at list entry e: the partner's position of the entry kForceEntryAhead on; with
+/// friction, where that entry is flagged (it touched at a recent step and most likely touches now), also its
+/// spring (no longer part of a stream the hardware follows) and the partner's velocity and spin, which the law
+/// reads. Velocities and spins of entries that do not touch are not needed, and few do.
+template <bool kFriction>
+[[gnu::always_inline]] inline void prefetch_entry_ahead(const std::int32_t* index, std::int64_t e, std::int64_t n_entries, const double* x,
+                                 const double* v, const double* w, const double* spring) {
+  if (e + kForceEntryAhead >= n_entries) return;
+  const std::int32_t raw_n = index[e + kForceEntryAhead];
+  const std::int32_t jn = raw_n & NeighborList::kPartnerMask;
+  __builtin_prefetch(x + 3 * jn);
+  __builtin_prefetch(x + 3 * jn + 2);
+  if constexpr (kFriction) {
+    if (NeighborList::spring_flagged(raw_n)) {
+      const double* s = spring + 3 * (e + kForceEntryAhead);
+      __builtin_prefetch(s);
+      __builtin_prefetch(s + 2);
+      __builtin_prefetch(v + 3 * jn);
+      __builtin_prefetch(v + 3 * jn + 2);
+      __builtin_prefetch(w + 3 * jn);
+      __builtin_prefetch(w + 3 * jn + 2);
+    }
+  }
+}
+
+/// A flagged entry (partner j) that no longer touches: its history goes with the contact. Only a flagged
+/// entry's spring can be other than +0.0 (neighbor.hpp), so the entries that never touch read no spring at all
+/// (issue 25, third round); this one is set to +0.0 (a -0.0 too) and its flag cleared.
+[[gnu::always_inline]] inline void end_contact(std::int32_t* index, double* spring, std::int64_t e, std::int32_t j) {
+  double* s = spring + 3 * e;
+  s[0] = s[1] = s[2] = 0.0;
+  index[e] = j;
+}
+
 /// Pass 1, entry by entry: the force (and torque) on each particle of `rows` (particles with a non-empty
 /// list) from its list, in the list's order, into force[3 r..] (torque[3 r..] with friction) for row r: the
 /// forces are stored per row, a sequential stream, not per particle. Updates the tangential histories and
@@ -100,61 +152,25 @@ void compute_forces_per_entry(const Particles& p, NeighborList& list, const Cont
   const double* __restrict w = kFriction ? p.w.data() : nullptr;
   const std::int64_t* __restrict offset = list.offset.data();
   std::int32_t* __restrict index = list.index.data();  // the partner, and the spring's flag (neighbor.hpp)
+  double* __restrict spring = kFriction ? list.xi.data() : nullptr;
   constexpr std::int32_t kMask = NeighborList::kPartnerMask;
   const std::int64_t n_entries = static_cast<std::int64_t>(list.index.size());
-  // prefetch distance in list entries: entries are contiguous over rows (CSR), so the look-ahead runs
-  // on into the next particles' lists. 32 (issue 17, third round): in the Table 1 box's own developed state
-  // (~1.2 entries per particle, lists of a 0.25 d skin) 8 left the partner's position a cache miss (force
-  // pass 17-19 -> 14.2-14.8 ns per particle-step; 64: no better)
-  constexpr std::int64_t kAhead = 32;
-  constexpr std::size_t kRowAhead = 4;
   for (std::size_t r = 0; r < n_rows; ++r) {
     const std::size_t i = static_cast<std::size_t>(rows[r]);
-    if (r + kRowAhead < n_rows) {
-      const std::size_t ia = 3 * static_cast<std::size_t>(rows[r + kRowAhead]);
-      __builtin_prefetch(x + ia);
-      __builtin_prefetch(x + ia + 2);
-    }
+    prefetch_row_ahead(rows, r, n_rows, x);
     const V3 xi = load3(x + 3 * i);
     V3 f{0, 0, 0};
     V3 torque{0, 0, 0};
     const std::int64_t k0 = offset[i], k1 = offset[i + 1];
     for (std::int64_t e = k0; e < k1; ++e) {
-      if (e + kAhead < n_entries) {
-        // the partner's position only: its velocity and spin are needed where it touches, which few do
-        const std::int32_t raw_n = index[e + kAhead];
-        const std::int32_t jn = raw_n & kMask;
-        __builtin_prefetch(x + 3 * jn);
-        __builtin_prefetch(x + 3 * jn + 2);
-        if constexpr (kFriction) {
-          // a flagged entry touched at a recent step and most likely touches now: its spring (no longer part
-          // of a stream the hardware follows) and the partner's velocity and spin, which the law reads
-          if (NeighborList::spring_flagged(raw_n)) {
-            const double* s = &list.xi[3 * (e + kAhead)];
-            __builtin_prefetch(s);
-            __builtin_prefetch(s + 2);
-            __builtin_prefetch(v + 3 * jn);
-            __builtin_prefetch(v + 3 * jn + 2);
-            __builtin_prefetch(w + 3 * jn);
-            __builtin_prefetch(w + 3 * jn + 2);
-          }
-        }
-      }
+      prefetch_entry_ahead<kFriction>(index, e, n_entries, x, v, w, spring);
       const std::int32_t raw = index[e];
       const std::int32_t j = raw & kMask;
       const V3 dx = xi - load3(x + 3 * j);
       const double r2 = dot(dx, dx);
       if (r2 >= contact_dist2) {
-        if constexpr (kFriction) {
-          // contact ended: its history goes with it. Only a flagged entry's spring can be other than +0.0
-          // (neighbor.hpp), so the entries that never touch read no spring at all (issue 25, third round);
-          // a flagged one is set to +0.0 (a -0.0 too, as before) and its flag cleared.
-          if (NeighborList::spring_flagged(raw)) {
-            double* s = &list.xi[3 * e];
-            s[0] = s[1] = s[2] = 0.0;
-            index[e] = j;
-          }
-        }
+        if constexpr (kFriction)
+          if (NeighborList::spring_flagged(raw)) end_contact(index, spring, e, j);
         continue;
       }
       // touching: its spring becomes what the law makes of it (flagged: it may be non-zero from now on)
@@ -171,7 +187,7 @@ void compute_forces_per_entry(const Particles& p, NeighborList& list, const Cont
       // the row's own velocity and spin only where it touches (most rows touch nothing)
       const V3 dv = load3(v + 3 * i) - load3(v + 3 * j);
       if constexpr (kFriction) {
-        f = f + contact.force(dx, rr, overlap, dv, load3(w + 3 * i), load3(w + 3 * j), k.radius, k.radius, &list.xi[3 * e], torque);
+        f = f + contact.force(dx, rr, overlap, dv, load3(w + 3 * i), load3(w + 3 * j), k.radius, k.radius, spring + 3 * e, torque);
       } else {
         f = f + contact.normal_force(dx, rr, overlap, dv);
       }
@@ -211,8 +227,6 @@ void compute_forces_batched(const Particles& p, NeighborList& list, const Spring
   double* __restrict spring = list.xi.data();
   constexpr std::int32_t kMask = NeighborList::kPartnerMask;
   const std::int64_t n_entries = static_cast<std::int64_t>(list.index.size());
-  constexpr std::int64_t kAhead = 32;  // as in compute_forces_per_entry
-  constexpr std::size_t kRowAhead = 4;
   FrictionBatch<kBatch> batch;
   const auto flush = [&] {
     for (std::size_t b = 0; b < batch.count; ++b) {  // the gather
@@ -244,44 +258,23 @@ void compute_forces_batched(const Particles& p, NeighborList& list, const Spring
   };
   for (std::size_t r = 0; r < n_rows; ++r) {
     const std::size_t i = static_cast<std::size_t>(rows[r]);
-    if (r + kRowAhead < n_rows) {
-      const std::size_t ia = 3 * static_cast<std::size_t>(rows[r + kRowAhead]);
-      __builtin_prefetch(x + ia);
-      __builtin_prefetch(x + ia + 2);
-    }
+    prefetch_row_ahead(rows, r, n_rows, x);
     const V3 xi = load3(x + 3 * i);
     store3(force + 3 * r, V3{0, 0, 0});
     store3(torque_out + 3 * r, V3{0, 0, 0});
     const std::int64_t k0 = offset[i], k1 = offset[i + 1];
     for (std::int64_t e = k0; e < k1; ++e) {
-      if (e + kAhead < n_entries) {
-        const std::int32_t raw_n = index[e + kAhead];
-        const std::int32_t jn = raw_n & kMask;
-        __builtin_prefetch(x + 3 * jn);
-        __builtin_prefetch(x + 3 * jn + 2);
-        if (NeighborList::spring_flagged(raw_n)) {
-          const double* s = spring + 3 * (e + kAhead);
-          __builtin_prefetch(s);
-          __builtin_prefetch(s + 2);
-          __builtin_prefetch(v + 3 * jn);
-          __builtin_prefetch(v + 3 * jn + 2);
-          __builtin_prefetch(w + 3 * jn);
-          __builtin_prefetch(w + 3 * jn + 2);
-        }
-      }
+      prefetch_entry_ahead<true>(index, e, n_entries, x, v, w, spring);
       const std::int32_t raw = index[e];
       const std::int32_t j = raw & kMask;
       const V3 dx = xi - load3(x + 3 * j);
       const double r2 = dot(dx, dx);
       const bool touching = !(r2 >= contact_dist2);  // as compute_forces_per_entry's test (a NaN touches)
       if (touching != NeighborList::spring_flagged(raw)) {
-        if (touching) {
+        if (touching)
           index[e] = NeighborList::with_spring_flag(raw);  // its spring may be non-zero from now on
-        } else {  // contact ended: its history goes with it
-          double* s = spring + 3 * e;
-          s[0] = s[1] = s[2] = 0.0;
-          index[e] = j;
-        }
+        else
+          end_contact(index, spring, e, j);
       }
       const std::size_t b = batch.count;  // < kBatch: a full batch is flushed at once
       batch.entry[b] = e;
