@@ -108,22 +108,45 @@ def overlap_matrix(n_fine, h_fine, origin, n_coarse, h_coarse):
     return w
 
 
-def snapshot_cells(path, n_cells, from_tref):
-    """Per coarse cell of one snapshot: solids volume, particle volume x velocity (y), fluid <eps> and <eps u_y>
-    volumes; the run's constants and the snapshot's time (s). None for a snapshot before from_tref t_ref (its
-    arrays are not read)."""
+def open_window_snapshot(path, from_tref):
+    """The snapshot file, open, when its time is at or after from_tref t_ref; None before (nothing else read). Refuses
+    (exit 2) a file that is not an HDF5 file or not a cgd snapshot."""
     try:
         f = h5py.File(path, "r")
     except OSError as e:
         fail(f"{path}: not a readable HDF5 file ({e})")
+    if "time" not in f.attrs or "params" not in f or "t_ref_s" not in f["params"].attrs:
+        f.close()
+        fail(f"{path}: no time attribute or /params@t_ref_s: not a cgd snapshot")
+    if not float(f.attrs["time"]) >= from_tref * float(f["params"].attrs["t_ref_s"]) * (1 - 1e-9):
+        f.close()
+        return None
+    if f.attrs.get("cgd_format") not in ("snapshot", b"snapshot"):
+        f.close()
+        fail(f"{path}: cgd_format is {f.attrs.get('cgd_format')!r}, expected 'snapshot'")
+    return f
+
+
+def fluid_grid(f, path):
+    """The snapshot's fluid grid: cells (x, y, z), spacing, origin and the void fraction (n_z, n_y, n_x)."""
+    fl = need(f, path, "fluid")
+    for key in ("cells", "spacing", "origin"):
+        if key not in fl.attrs:
+            fail(f"{path}: /fluid attribute {key} missing")
+    cells = np.asarray(fl.attrs["cells"], dtype=int)
+    eps = np.asarray(need(f, path, "fluid/void_fraction", (cells[2], cells[1], cells[0]))[:], dtype=float)
+    return cells, np.asarray(fl.attrs["spacing"], dtype=float), np.asarray(fl.attrs["origin"], dtype=float), eps
+
+
+def snapshot_cells(path, n_cells, from_tref):
+    """Per coarse cell of one snapshot: solids volume, particle volume x velocity (y), fluid <eps> and <eps u_y>
+    volumes; the run's constants and the snapshot's time (s). None for a snapshot before from_tref t_ref (its
+    arrays are not read)."""
+    f = open_window_snapshot(path, from_tref)
+    if f is None:
+        return None
     with f:
-        if "time" not in f.attrs or "params" not in f or "t_ref_s" not in f["params"].attrs:
-            fail(f"{path}: no time attribute or /params@t_ref_s: not a cgd snapshot")
         time = float(f.attrs["time"])
-        if not time >= from_tref * float(f["params"].attrs["t_ref_s"]) * (1 - 1e-9):
-            return None
-        if f.attrs.get("cgd_format") not in ("snapshot", b"snapshot"):
-            fail(f"{path}: cgd_format is {f.attrs.get('cgd_format')!r}, expected 'snapshot'")
         p = need(f, path, "params").attrs
         for key in ("box_size_m", "particle_volume_m3", "parcel_size", "u_t_m_s", "t_ref_s", "density_kg_m3",
                     "fluid_density_kg_m3", "gravity_m_s2"):
@@ -141,12 +164,8 @@ def snapshot_cells(path, n_cells, from_tref):
                 float(np.asarray(parts.attrs["pressure_gradient_mean"])[1]))
         beta = np.asarray(need(f, path, "particles/drag_coefficient", (n,))[:], dtype=float)
         u_p = np.asarray(need(f, path, "particles/fluid_velocity", (n, 3))[:, 1], dtype=float)
-        fl = need(f, path, "fluid")
-        cells_f = np.asarray(fl.attrs["cells"], dtype=int)
-        spacing = np.asarray(fl.attrs["spacing"], dtype=float)
-        origin = np.asarray(fl.attrs["origin"], dtype=float)
+        cells_f, spacing, origin, eps = fluid_grid(f, path)
         shape_f = (cells_f[2], cells_f[1], cells_f[0])
-        eps = np.asarray(need(f, path, "fluid/void_fraction", shape_f)[:], dtype=float)
         eu = np.asarray(need(f, path, "fluid/eps_velocity", shape_f + (3,))[:, :, :, 1], dtype=float)
         for name, a in (("particles/position", x), ("particles/velocity", v), ("fluid/void_fraction", eps),
                         ("fluid/eps_velocity", eu), ("particles/pressure_gradient", dpdy),

@@ -74,26 +74,12 @@ def phi_at_particles(x, solids, origin, spacing):
 
 def snapshot_phi(path, from_tref):
     """phi_bar at each particle of one snapshot and its fluid cell volume; None before from_tref t_ref."""
-    try:
-        f = h5py.File(path, "r")
-    except OSError as e:
-        cd.fail(f"{path}: not a readable HDF5 file ({e})")
+    f = cd.open_window_snapshot(path, from_tref)
+    if f is None:
+        return None
     with f:
-        if "time" not in f.attrs or "params" not in f or "t_ref_s" not in f["params"].attrs:
-            cd.fail(f"{path}: no time attribute or /params@t_ref_s: not a cgd snapshot")
-        if not float(f.attrs["time"]) >= from_tref * float(f["params"].attrs["t_ref_s"]) * (1 - 1e-9):
-            return None
-        if f.attrs.get("cgd_format") not in ("snapshot", b"snapshot"):
-            cd.fail(f"{path}: cgd_format is {f.attrs.get('cgd_format')!r}, expected 'snapshot'")
         x = np.asarray(cd.need(f, path, "particles/position", (None, 3))[:], dtype=float)
-        fl = cd.need(f, path, "fluid")
-        for key in ("cells", "spacing", "origin"):
-            if key not in fl.attrs:
-                cd.fail(f"{path}: /fluid attribute {key} missing")
-        cells = np.asarray(fl.attrs["cells"], dtype=int)
-        spacing = np.asarray(fl.attrs["spacing"], dtype=float)
-        origin = np.asarray(fl.attrs["origin"], dtype=float)
-        eps = np.asarray(cd.need(f, path, "fluid/void_fraction", (cells[2], cells[1], cells[0]))[:], dtype=float)
+        _, spacing, origin, eps = cd.fluid_grid(f, path)
         if not (np.all(np.isfinite(x)) and np.all(np.isfinite(eps))):
             cd.fail(f"{path}: /particles/position or /fluid/void_fraction holds non-finite values")
     return phi_at_particles(x, 1.0 - eps, origin, spacing), float(np.prod(spacing))
