@@ -4,7 +4,8 @@
 #
 # usage: scripts/figure3_box.sh OUT [PHIS=0.02] [ALPHAS=2,3,4,6,8] [SEEDS=1,2,3] [CLOSURES=micro,radl,halfbox,perfect,model]
 #   (CLOSURES may also name modelraw)
-#   OUT: a `Makefile.pipeline PROFILE=$PROFILE` output directory with OUT/generate/phi<phi>/DONE for every phi.
+#   OUT: a `Makefile.pipeline PROFILE=$PROFILE` output directory with OUT/generate/phi<phi>/DONE for every phi, or
+#        with OUT/figure3_c<CELLS>/resolved_phi<phi>.h5 (and filtered_phi<phi>.h5 for perfect) copied from data/.
 # Closures (the run directory's label):
 #   micro    the scene's micro law (Beetstra), no correction;
 #   radl     radl2014 with the paper's c_corr(alpha), as the pipeline runs it;
@@ -48,8 +49,16 @@ dx=$(python3 -c "print($box_dp/$cells)")
 dir=$out/figure3_c$cells
 mkdir -p "$dir"
 say() { echo "[figure3] $*" >&2; }
+# the resolved run is read only to make its summary (resolved_phi<phi>.h5) and, for perfect, its filtered file
+# (filtered_phi<phi>.h5) in OUT/figure3_c<CELLS>: copies of those (data/reference/<box>_phi<phi>_resolved.h5 and
+# data/filtered/<box>_phi<phi>.h5, shipped) stand in for a run directory that is gone
 for phi in "${phis[@]}"; do
-  [ -f "$out/generate/phi$phi/DONE" ] || { echo "figure3_box.sh: $out/generate/phi$phi is not a finished run" >&2; exit 2; }
+  [ -f "$out/generate/phi$phi/DONE" ] && continue
+  [ -f "$dir/resolved_phi$phi.h5" ] && { [[ " ${closures[*]} " != *" perfect "* ]] || [ -f "$dir/filtered_phi$phi.h5" ]; } &&
+    continue
+  echo "figure3_box.sh: $out/generate/phi$phi is not a finished run (and $dir has not its resolved_phi$phi.h5" \
+    "and filtered_phi$phi.h5 from an earlier call or copied from data/)" >&2
+  exit 2
 done
 for c in "${closures[@]}"; do
   case $c in micro | radl | halfbox | perfect | model | modelraw) ;;
