@@ -11,7 +11,8 @@
 // (Schiller-Naumann). The correction factor depends on phi only, not on the slip, so the filtered
 // law keeps every property of its microscopic base law that the engine relies on (beta_p w increasing
 // in w; beta_p(w) >= beta_p(0)), and 0 < beta_bar <= beta_micro when 0 <= h < 1, a > 0, alpha >= 1,
-// 0 <= a_c <= 1.
+// 0 <= a_c <= 1, k_c >= 0 (a parcel fit may give k_c < 0, c_corr > 1: beta_bar above beta_micro, which the
+// engine's stability bound sees, since it evaluates this law).
 //
 // Two sources of the master curves h(phi), a(phi):
 //   Radl2014Curves  the published piecewise cubics (data/reference/radl2014-filtered-drag.csv), base
