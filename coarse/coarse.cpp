@@ -8,6 +8,7 @@
 #include "core/error.hpp"
 #include "core/h5.hpp"
 #include "core/schema/coarse_summary.hpp"
+#include "core/schema/filtered.hpp"
 #include "core/schema/series.hpp"
 #include "core/schema/snapshot.hpp"
 
@@ -93,6 +94,63 @@ SlipSummary summarise_reference(const std::string& run_dir, int batches) {
     throw InputError("--reference " + run_dir + ": no scene.toml there (expected a run directory of cgd-generate)");
   const Scene reference = load_scene(scene_path, {});
   return summarise_run(run_dir, reference.derived.u_t_m_s, reference.run.sampling_start_s, 1, batches);
+}
+
+SlipSummary summarise_filtered(const std::string& path, int batches, Scene* scene_out) {
+  const schema::Filtered f = schema::read_filtered(path);
+  if (f.run_paths.size() != 1)
+    throw InputError(path + ": a filtered file of " + std::to_string(f.run_paths.size()) +
+                     " runs; the slip of a resolved run needs the filtered file of that run alone (cgd-filter RUN_DIR)");
+  const schema::FilteredGroup* whole = nullptr;
+  for (const schema::FilteredGroup& g : f.groups)
+    if (g.kind == schema::FilterKind::WholeBox) whole = &g;
+  if (!whole || !whole->per_snapshot || whole->per_snapshot->slip.empty())
+    throw InputError(path + ": /whole_box/per_snapshot/slip is missing (expected a filtered file of cgd-filter, which "
+                            "always writes it)");
+  const Scene scene = load_scene_from_string(f.scene_toml, path + " (its scene attribute)");
+  const double u_t = scene.derived.u_t_m_s;
+  const std::size_t n = f.snapshot_time_s.size(), bins = f.bins();
+  const schema::FilteredGroup::PerSnapshot& ps = *whole->per_snapshot;
+  std::vector<double> t(n), slip(n);
+  for (std::size_t k = 0; k < n; ++k) {
+    double sum = 0;
+    std::int64_t count = 0;
+    for (std::size_t b = 0; b < bins; ++b) {
+      count += ps.count[k * bins + b];
+      if (ps.count[k * bins + b] > 0) sum += ps.slip[k * bins + b];
+    }
+    if (count <= 0) throw InputError(path + ": snapshot " + std::to_string(k) + " of /whole_box/per_snapshot has no particle");
+    t[k] = f.snapshot_time_s[k];
+    slip[k] = sum / static_cast<double>(count) / u_t;
+    if (k > 0 && !(t[k] > t[k - 1]))
+      throw InputError(path + ": /snapshots/time_s is not increasing at row " + std::to_string(k));
+  }
+  SlipSummary s;
+  s.run_dir = path;
+  s.u_t_m_s = u_t;
+  try {
+    const double start = n ? t.front() : 0, end = n ? t.back() * (1 + 1e-12) + 1e-300 : 0;
+    s.slip = window_average(t, slip, start, end, batches);
+    const int half_batches = std::max(2, batches / 2);
+    const double mid = 0.5 * (s.slip.start_s + s.slip.end_s);
+    const WindowAverage first = window_average(t, slip, start, mid, half_batches);
+    const WindowAverage second = window_average(t, slip, mid, end, half_batches);
+    s.drift = second.mean - first.mean;
+    s.drift_stderr = std::hypot(first.standard_error, second.standard_error);
+  } catch (const std::invalid_argument& e) {
+    throw InputError(path + ": cannot average the whole box's slip over its " + std::to_string(n) + " snapshots: " +
+                     e.what() + " (fewer --batches)");
+  }
+  s.simulated_s = n ? t.back() : 0;
+  s.wall_s = 0;  // the filtered file does not carry the run's wall time
+  s.ranks = 1;
+  s.core_seconds_per_simulated_second = 0;
+  if (scene_out) *scene_out = scene;
+  return s;
+}
+
+SlipSummary summarise_reference_or_filtered(const std::string& path, int batches) {
+  return std::filesystem::is_regular_file(path) ? summarise_filtered(path, batches) : summarise_reference(path, batches);
 }
 
 Comparison compare(const SlipSummary& coarse, const SlipSummary& reference) {

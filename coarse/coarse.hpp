@@ -55,6 +55,21 @@ SlipSummary summarise_run(const std::string& run_dir, double u_t_m_s, double sam
 /// resolved run it is compared with. InputError if the scene or the series cannot be read.
 SlipSummary summarise_reference(const std::string& run_dir, int batches = 10);
 
+/// The slip of a resolved run from its filtered file (cgd-filter of that one run; the files shipped in
+/// data/filtered/): at each snapshot of the filter's window the whole box's mean filtered slip,
+/// Σ_i ū_slip,i,y / N with ū = ⟨εu⟩/⟨ε⟩ for every particle (`/whole_box/per_snapshot`, docs/filter.md), over u_t
+/// of the file's scene, averaged over those snapshots as summarise_run averages series rows (batch means, the
+/// drift of the halves). The series' slip_velocity is the same average taken with the face velocities at every
+/// fluid step; the shipped runs' two agree within 0.002 u_t (docs/coarse.md). The cost is unknown there:
+/// wall_s = 0, ranks = 1. InputError if the file is not a filtered file of one run with the whole box's
+/// per-snapshot sums, or its window holds fewer than 2 * batches snapshots.
+/// `scene_out`: where given, the file's scene (for write_summary).
+SlipSummary summarise_filtered(const std::string& path, int batches = 10, Scene* scene_out = nullptr);
+
+/// summarise_filtered for a regular file, summarise_reference for a run directory: what --reference and
+/// --summarise accept.
+SlipSummary summarise_reference_or_filtered(const std::string& path, int batches = 10);
+
 /// The comparison of a coarse run with a resolved reference.
 struct Comparison {
   SlipSummary coarse, reference;

@@ -21,6 +21,8 @@ namespace {
 // coarse run) over a window chosen here, written as a coarse_summary file, by the code that summarises every
 // coarse run (coarse::summarise_run: the mean, its batch-means error, the drift between the window's halves,
 // the cost). Nothing is simulated. Makefile.pipeline uses it for the resolved references of the study.
+// cgd-coarse --summarise FILTERED.h5 -o FILE: the same from a resolved run's filtered file (the shipped
+// data/filtered/ files: coarse::summarise_filtered), over the filter's window, when the run directory is gone.
 int summarise_main(int argc, char** argv) {
   std::string run_dir, output;
   double from_tref = -1;
@@ -29,17 +31,30 @@ int summarise_main(int argc, char** argv) {
   CLI::App app{"cgd-coarse --summarise: the time-averaged slip of a finished run (resolved or coarse) over a window, "
                "its batch-means error, the drift between the window's halves and the cost, as a coarse_summary file",
                "cgd-coarse"};
-  app.add_option("--summarise", run_dir, "run directory (with scene.toml and series.h5)")->required()->type_name("RUN_DIR");
+  app.add_option("--summarise", run_dir, "run directory (with scene.toml and series.h5), or a resolved run's filtered "
+                 "file (cgd-filter of that run alone: the whole box's slip at its snapshots, over the filter's window)")
+      ->required()->type_name("RUN_DIR|FILTERED.h5");
   app.add_option("--from-tref", from_tref, "start of the window in t_ref (default: the run's run.sampling_start)");
   app.add_option("--ranks", ranks, "ranks the run used, for the cost (default: the checkpoint's `ranks`, else 1)");
   app.add_option("--batches", batches, "batches of the standard error (default 10)");
   app.add_option("-o,--output", output, "summary file to write (cgd_format coarse_summary)")->required()->type_name("FILE");
   app.add_flag("--force", force, "overwrite FILE if it exists");
   cgd::parse_command_line(app, argc, argv, "cgd-coarse");
+  if (batches < 2) throw cgd::InputError("--batches: " + std::to_string(batches) + " is not allowed (>= 2)");
+  if (std::filesystem::is_regular_file(run_dir)) {
+    if (from_tref >= 0)
+      throw cgd::InputError("--from-tref: not with a filtered file (" + run_dir + "): its window is the filter's (cgd-filter --from-tref)");
+    cgd::check_output_file(output, force);
+    cgd::Scene scene;
+    const auto s = cgd::coarse::summarise_filtered(run_dir, batches, &scene);
+    if (cgd::is_output_rank()) cgd::coarse::write_summary(output, scene, s, std::nullopt, to_string(scene.fluid->drag));
+    std::cout << "cgd-coarse: " << run_dir << ": " << cgd::coarse::describe(s)
+              << " (from the filtered file's snapshots: the cost is not in it)\nwrote " << output << "\n";
+    return cgd::kExitOk;
+  }
   const std::filesystem::path dir(run_dir);
   if (!std::filesystem::exists(dir / "scene.toml") || !std::filesystem::exists(dir / "series.h5"))
-    throw cgd::InputError("--summarise " + run_dir + ": no scene.toml and series.h5 there (expected a run directory)");
-  if (batches < 2) throw cgd::InputError("--batches: " + std::to_string(batches) + " is not allowed (>= 2)");
+    throw cgd::InputError("--summarise " + run_dir + ": no scene.toml and series.h5 there (expected a run directory or a filtered file)");
   cgd::check_output_file(output, force);
   const cgd::Scene scene = cgd::load_scene((dir / "scene.toml").string(), {});
   if (!scene.fluid) throw cgd::InputError("--summarise " + run_dir + ": the run solved no fluid: it has no slip to summarise");
@@ -78,7 +93,8 @@ int main(int argc, char** argv) {
                                                 "with --restart -o DIR it may be left out (DIR/scene.toml is used)");
           app.add_option("--model", model, "drag model file of cgd-fit: the same as --set fluid.drag=model "
                                            "--set fluid.drag_model=MODEL.h5");
-          app.add_option("--reference", reference, "resolved run directory (cgd-generate) to compare the slip with");
+          app.add_option("--reference", reference, "resolved run directory (cgd-generate) to compare the slip with, or "
+                                                   "that run's filtered file (e.g. data/filtered/half_phi0.05.h5)");
           app.add_option("--batches", batches, "batches of the standard error of the mean slip (default 10)");
           app.add_option("--summarise", summarise_dir,
                          "instead of running: the slip summary of a finished run (resolved or coarse) over a window, "
@@ -95,9 +111,14 @@ int main(int argc, char** argv) {
     }
     const cgd::Scene scene = cgd::load_scene(options.scene_path, overrides);
     cgd::coarse::check_coarse_scene(scene, ranks);
-    if (!reference.empty() && !std::filesystem::exists(std::filesystem::path(reference) / "series.h5"))
-      throw cgd::InputError("--reference " + reference + ": no series.h5 there (expected a run directory of cgd-generate)");
+    if (!reference.empty() && !std::filesystem::is_regular_file(reference) &&
+        !std::filesystem::exists(std::filesystem::path(reference) / "series.h5"))
+      throw cgd::InputError("--reference " + reference + ": no series.h5 there (expected a run directory of cgd-generate "
+                            "or its filtered file)");
     if (batches < 2) throw cgd::InputError("--batches: " + std::to_string(batches) + " is not allowed (>= 2)");
+    // a filtered file is read now, so that a wrong one is refused before the run, not after it
+    if (!reference.empty() && std::filesystem::is_regular_file(reference))
+      (void)cgd::coarse::summarise_filtered(reference, batches);
     cgd::RunSettings settings;
     settings.output_dir =
         options.output_dir.empty() ? cgd::default_run_directory("coarse", options.scene_path) : options.output_dir;
@@ -115,7 +136,7 @@ int main(int argc, char** argv) {
         const auto s = cgd::coarse::summarise_run(settings.output_dir, u_t, scene.run.sampling_start_s, ranks, batches);
         std::optional<cgd::coarse::Comparison> cmp;
         if (!reference.empty())
-          cmp = cgd::coarse::compare(s, cgd::coarse::summarise_reference(reference, batches));
+          cmp = cgd::coarse::compare(s, cgd::coarse::summarise_reference_or_filtered(reference, batches));
         // "model": the file is in the scene's drag_model; "model-raw": the model with c_corr off (parcel fit)
         std::string drag = to_string(scene.fluid->drag);
         if (scene.fluid->drag == cgd::DragLaw::Model && !scene.fluid->parcel_correction) drag = "model-raw";

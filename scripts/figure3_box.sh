@@ -5,7 +5,8 @@
 # usage: scripts/figure3_box.sh OUT [PHIS=0.02] [ALPHAS=2,3,4,6,8] [SEEDS=1,2,3] [CLOSURES=micro,radl,halfbox,perfect,model]
 #   (CLOSURES may also name modelraw)
 #   OUT: a `Makefile.pipeline PROFILE=$PROFILE` output directory with OUT/generate/phi<phi>/DONE for every phi, or
-#        with OUT/figure3_c<CELLS>/resolved_phi<phi>.h5 (and filtered_phi<phi>.h5 for perfect) copied from data/.
+#        with the run's filtered file as OUT/figure3_c<CELLS>/filtered_phi<phi>.h5 (a copy of the shipped
+#        data/filtered/<box>_phi<phi>.h5): the resolved slip is then the filtered file's (cgd-coarse --summarise FILE).
 # Closures (the run directory's label):
 #   micro    the scene's micro law (Beetstra), no correction;
 #   radl     radl2014 with the paper's c_corr(alpha), as the pipeline runs it;
@@ -50,14 +51,12 @@ dir=$out/figure3_c$cells
 mkdir -p "$dir"
 say() { echo "[figure3] $*" >&2; }
 # the resolved run is read only to make its summary (resolved_phi<phi>.h5) and, for perfect, its filtered file
-# (filtered_phi<phi>.h5) in OUT/figure3_c<CELLS>: copies of those (data/reference/<box>_phi<phi>_resolved.h5 and
-# data/filtered/<box>_phi<phi>.h5, shipped) stand in for a run directory that is gone
+# (filtered_phi<phi>.h5) in OUT/figure3_c<CELLS>: its filtered file alone (the shipped data/filtered/<box>_phi<phi>.h5,
+# copied there) stands in for a run directory that is gone
 for phi in "${phis[@]}"; do
-  [ -f "$out/generate/phi$phi/DONE" ] && continue
-  [ -f "$dir/resolved_phi$phi.h5" ] && { [[ " ${closures[*]} " != *" perfect "* ]] || [ -f "$dir/filtered_phi$phi.h5" ]; } &&
-    continue
-  echo "figure3_box.sh: $out/generate/phi$phi is not a finished run (and $dir has not its resolved_phi$phi.h5" \
-    "and filtered_phi$phi.h5 from an earlier call or copied from data/)" >&2
+  [ -f "$out/generate/phi$phi/DONE" ] || [ -f "$dir/filtered_phi$phi.h5" ] && continue
+  echo "figure3_box.sh: $out/generate/phi$phi is not a finished run (and $dir has not its filtered_phi$phi.h5," \
+    "from an earlier call or copied from data/filtered/)" >&2
   exit 2
 done
 for c in "${closures[@]}"; do
@@ -70,7 +69,13 @@ done
 # settings with the grid of CELLS across added when the profile's grids lack it)
 for phi in "${phis[@]}"; do
   ref=$dir/resolved_phi$phi.h5
-  [ -f "$ref" ] || "$build/cgd-coarse" --summarise "$out/generate/phi$phi" --from-tref "$from_tref" --force -o "$ref" > /dev/null
+  if [ ! -f "$ref" ]; then
+    if [ -f "$out/generate/phi$phi/DONE" ]; then
+      "$build/cgd-coarse" --summarise "$out/generate/phi$phi" --from-tref "$from_tref" --force -o "$ref" > /dev/null
+    else  # the filtered file's window is the filter's: from_tref to the end, as above
+      "$build/cgd-coarse" --summarise "$dir/filtered_phi$phi.h5" --force -o "$ref" > /dev/null
+    fi
+  fi
   [[ " ${closures[*]} " == *" perfect "* ]] || continue
   filtered=$dir/filtered_phi$phi.h5
   if [ ! -f "$filtered" ]; then

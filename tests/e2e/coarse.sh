@@ -7,6 +7,11 @@
 #  * refusals (exit 2, nothing written): a parcel wider than a cell, too few parcels, an empty window;
 #  * --summarise RUN_DIR over the reference's own window gives the reference values a coarse run stored, and the
 #    drift of its halves; over a later window (--from-tref) another window; refuses an existing -o, a non-run.
+#  * --summarise FILTERED.h5 (a resolved run's filtered file, as shipped in data/filtered/): the whole box's slip at
+#    each snapshot equals the series' slip_velocity at that time (to round-off: the same average, <eps u>/<eps> minus
+#    the particles' mean velocity), and the summary is the time-weighted mean of those, recomputed here;
+#    --reference FILTERED.h5 compares a coarse run with it; refusals (exit 2, nothing written): --from-tref with a
+#    file, a file that is not a filtered file, a wrong --reference file (before the run).
 # Environment (set by CTest): CGD_SOURCE_DIR, CGD_BINARY_DIR.
 set -u
 source_dir=${CGD_SOURCE_DIR:-$(cd "$(dirname "$0")/../.." && pwd)}
@@ -66,6 +71,44 @@ assert abs(l['window_start_s'] / s['window_start_s'] - 2) < 1e-9, (l['window_sta
 "$coarse" --summarise "$tmp" -o "$tmp/nothing.h5" >/dev/null 2>"$tmp/err"; st=$?
 [ $st -eq 2 ] && [ ! -e "$tmp/nothing.h5" ] && echo "ok   --summarise: a directory that is no run is refused (exit 2)" || fail "--summarise of a non-run: $st"
 
+# --summarise / --reference with a resolved run's filtered file: a run with a snapshot every 0.05 t_ref (16 in the
+# filter's window from 0.25 t_ref: enough rows for 2 batches in each half)
+filter=$binary_dir/cgd-filter
+"$generate" "$scene" "${small[@]}" --set run.dump_interval_tref=0.05 --set run.end_time_tref=1 -o "$tmp/genf" >/dev/null 2>&1 || fail "cgd-generate (filtered)"
+"$filter" "$tmp/genf" --from-tref 0.25 --quiet -o "$tmp/genf.h5" >/dev/null 2>&1 || fail "cgd-filter"
+"$coarse" --summarise "$tmp/genf.h5" --batches 2 -o "$tmp/fsum.h5" >"$tmp/f.out" 2>&1 || { cat "$tmp/f.out"; fail "--summarise FILTERED.h5"; }
+"$py" - "$tmp" <<'PY' && echo "ok   --summarise FILTERED.h5: the whole box's slip of every snapshot is the series' (round-off), the summary their time-weighted mean" || fail "--summarise FILTERED.h5 values"
+import sys, h5py, numpy as np
+d = sys.argv[1]
+f = h5py.File(d + "/genf.h5", "r")
+ps = f["whole_box/per_snapshot"]
+t = f["snapshots/time_s"][()]
+slip = ps["slip"][()].sum(axis=1) / ps["count"][()].sum(axis=1)
+series = h5py.File(d + "/genf/series.h5", "r")
+ts, ss = series["time"][()], series["slip_velocity"][()][:, 1]
+for tk, sk in zip(t, slip):
+    i = int(np.argmin(abs(ts - tk)))
+    assert ts[i] == tk, (ts[i], tk)  # a series row at every snapshot
+    assert abs(sk / ss[i] - 1) < 1e-12, (tk, sk, ss[i])
+a = h5py.File(d + "/fsum.h5", "r").attrs
+u_t = h5py.File(d + "/genf/series.h5", "r")["params"].attrs["u_t_m_s"]
+w = np.append(np.diff(t), np.median(np.diff(t)))  # core/time_average.hpp: each row to the next, the last the median
+mean = (w * slip).sum() / w.sum() / u_t
+assert a["cgd_format"] == "coarse_summary" and abs(a["slip_over_ut"] / mean - 1) < 1e-12, (a["slip_over_ut"], mean)
+assert a["window_start_s"] == t[0] and a["wall_s"] == 0 and a["batches"] == 2 and a["slip_stderr"] > 0
+PY
+"$coarse" "$scene" "${small[@]}" --set particles.parcel_size=2 --set run.end_time_tref=1 --reference "$tmp/genf.h5" --batches 2 -o "$tmp/cref" >/dev/null 2>&1 || fail "--reference FILTERED.h5"
+"$py" -c "
+import h5py
+c = h5py.File('$tmp/cref/summary.h5').attrs; f = h5py.File('$tmp/fsum.h5').attrs
+assert c['reference'] == '$tmp/genf.h5' and c['reference_slip_over_ut'] == f['slip_over_ut'], (c['reference_slip_over_ut'], f['slip_over_ut'])
+assert abs(c['relative_error'] - (c['slip_over_ut'] / f['slip_over_ut'] - 1)) < 1e-12
+" && echo "ok   --reference FILTERED.h5: the coarse run's error against the filtered file's slip" || fail "--reference FILTERED.h5 values"
+"$coarse" --summarise "$tmp/genf.h5" --from-tref 0.5 -o "$tmp/nothing.h5" >/dev/null 2>"$tmp/err"; st=$?
+[ $st -eq 2 ] && [ ! -e "$tmp/nothing.h5" ] && grep -q "from-tref" "$tmp/err" && echo "ok   --summarise FILTERED.h5 --from-tref is refused (exit 2): the window is the filter's" || fail "--from-tref with a file: $st"
+"$coarse" --summarise "$tmp/genf/series.h5" -o "$tmp/nothing.h5" >/dev/null 2>"$tmp/err"; st=$?
+[ $st -eq 2 ] && [ ! -e "$tmp/nothing.h5" ] && grep -q "series.h5" "$tmp/err" && echo "ok   --summarise of a file that is not a filtered file is refused (exit 2): $(head -n 1 "$tmp/err" | head -c 160)" || fail "--summarise series.h5: $st"
+
 # restart: half, then continue to the end, against the uninterrupted run
 "$coarse" "$scene" "${small[@]}" --set particles.parcel_size=2 --set run.end_time_tref=0.5 -o "$tmp/half" >/dev/null 2>&1 || fail "half run"
 "$coarse" "$scene" "${small[@]}" --set particles.parcel_size=2 --set run.end_time_tref=1 -o "$tmp/half" --restart >/dev/null 2>"$tmp/r.err" || { cat "$tmp/r.err"; fail "restart"; }
@@ -87,5 +130,6 @@ expect_bad too_few_parcels "at least 100" -- "$scene" "${small[@]}" --set partic
 expect_bad empty_window "must be before run.end_time" -- "$scene" "${small[@]}" --set run.end_time_tref=0.2
 expect_bad missing_model "drag_model" -- "$scene" "${small[@]}" --model "$tmp/nope.h5"
 expect_bad missing_reference "--reference" -- "$scene" "${small[@]}" --reference "$tmp/nope"
+expect_bad reference_not_filtered "series.h5" -- "$scene" "${small[@]}" --reference "$tmp/genf/series.h5"
 [ $failures -eq 0 ] && echo "all cgd-coarse checks passed" || echo "$failures cgd-coarse check(s) failed"
 exit $((failures > 0))
