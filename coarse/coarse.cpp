@@ -165,8 +165,11 @@ Comparison compare(const SlipSummary& coarse, const SlipSummary& reference) {
 std::string describe(const SlipSummary& s) {
   std::ostringstream o;
   o << "slip <u_slip,y>/u_t = " << num(s.slip.mean) << " +- " << num(s.slip.standard_error, 2) << " (batch means, "
-    << s.slip.batches << " batches over " << num(s.slip.start_s) << "-" << num(s.slip.end_s) << " s); cost "
-    << num(s.core_seconds_per_simulated_second) << " core-s per simulated s (" << s.ranks << " rank(s))";
+    << s.slip.batches << " batches over " << num(s.slip.start_s) << "-" << num(s.slip.end_s) << " s); ";
+  if (s.wall_s > 0)
+    o << "cost " << num(s.core_seconds_per_simulated_second) << " core-s per simulated s (" << s.ranks << " rank(s))";
+  else
+    o << "cost not known (no wall time: a filtered file's snapshots)";
   if (!s.stationary())
     o << "\nwarning: the window is not stationary: its second half averages " << num(s.drift, 3) << " +- "
       << num(s.drift_stderr, 2) << " u_t above its first (beyond " << SlipSummary::kDriftSigmas

@@ -48,8 +48,7 @@ int summarise_main(int argc, char** argv) {
     cgd::Scene scene;
     const auto s = cgd::coarse::summarise_filtered(run_dir, batches, &scene);
     if (cgd::is_output_rank()) cgd::coarse::write_summary(output, scene, s, std::nullopt, to_string(scene.fluid->drag));
-    std::cout << "cgd-coarse: " << run_dir << ": " << cgd::coarse::describe(s)
-              << " (from the filtered file's snapshots: the cost is not in it)\nwrote " << output << "\n";
+    std::cout << "cgd-coarse: " << run_dir << ": " << cgd::coarse::describe(s) << "\nwrote " << output << "\n";
     return cgd::kExitOk;
   }
   const std::filesystem::path dir(run_dir);
