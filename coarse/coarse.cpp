@@ -108,7 +108,10 @@ SlipSummary summarise_filtered(const std::string& path, int batches, Scene* scen
     throw InputError(path + ": /whole_box/per_snapshot/slip is missing (expected a filtered file of cgd-filter, which "
                             "always writes it)");
   const Scene scene = load_scene_from_string(f.scene_toml, path + " (its scene attribute)");
+  if (!scene.fluid) throw InputError(path + ": the run's scene solved no fluid: it has no slip");
   const double u_t = scene.derived.u_t_m_s;
+  if (f.snapshot_time_s.size() != f.snapshot_run_index.size())
+    throw InputError(path + ": /snapshots/time_s is missing (a file of an older cgd-filter): filter the run again");
   const std::size_t n = f.snapshot_time_s.size(), bins = f.bins();
   const schema::FilteredGroup::PerSnapshot& ps = *whole->per_snapshot;
   std::vector<double> t(n), slip(n);

@@ -61,8 +61,9 @@ SlipSummary summarise_reference(const std::string& run_dir, int batches = 10);
 /// of the file's scene, averaged over those snapshots as summarise_run averages series rows (batch means, the
 /// drift of the halves). The series' slip_velocity is the same average taken with the face velocities at every
 /// fluid step; the shipped runs' two agree within 0.002 u_t (docs/coarse.md). The cost is unknown there:
-/// wall_s = 0, ranks = 1. InputError if the file is not a filtered file of one run with the whole box's
-/// per-snapshot sums, or its window holds fewer than 2 * batches snapshots.
+/// wall_s = 0, ranks = 1, simulated_s the last snapshot's time. InputError if the file is not a filtered file of
+/// one run with the whole box's per-snapshot sums and the snapshots' times, or its window holds too few snapshots
+/// for the batch means (2 per batch over the window and over each half: 4 max(2, batches/2) at least).
 /// `scene_out`: where given, the file's scene (for write_summary).
 SlipSummary summarise_filtered(const std::string& path, int batches = 10, Scene* scene_out = nullptr);
 

@@ -44,7 +44,9 @@ int summarise_main(int argc, char** argv) {
   if (std::filesystem::is_regular_file(run_dir)) {
     if (from_tref >= 0)
       throw cgd::InputError("--from-tref: not with a filtered file (" + run_dir + "): its window is the filter's (cgd-filter --from-tref)");
-    cgd::check_output_file(output, force);
+    if (ranks > 0)
+      throw cgd::InputError("--ranks: not with a filtered file (" + run_dir + "): it carries no wall time, so no cost");
+    cgd::check_output_file(output, force, {run_dir});
     cgd::Scene scene;
     const auto s = cgd::coarse::summarise_filtered(run_dir, batches, &scene);
     if (cgd::is_output_rank()) cgd::coarse::write_summary(output, scene, s, std::nullopt, to_string(scene.fluid->drag));
@@ -98,8 +100,9 @@ int main(int argc, char** argv) {
           app.add_option("--summarise", summarise_dir,
                          "instead of running: the slip summary of a finished run (resolved or coarse) over a window, "
                          "as a coarse_summary file: cgd-coarse --summarise RUN_DIR [--from-tref T] [--ranks N] "
-                         "[--batches N] -o FILE [--force] (cgd-coarse --summarise X --help)")
-              ->type_name("RUN_DIR");
+                         "[--batches N] -o FILE [--force], or --summarise FILTERED.h5 [--batches N] -o FILE [--force] "
+                         "(cgd-coarse --summarise X --help)")
+              ->type_name("RUN_DIR|FILTERED.h5");
         });
     int ranks = 1;
     MPI_Comm_size(MPI_COMM_WORLD, &ranks);

@@ -6,7 +6,9 @@
 #   (CLOSURES may also name modelraw)
 #   OUT: a `Makefile.pipeline PROFILE=$PROFILE` output directory with OUT/generate/phi<phi>/DONE for every phi, or
 #        with the run's filtered file as OUT/figure3_c<CELLS>/filtered_phi<phi>.h5 (a copy of the shipped
-#        data/filtered/<box>_phi<phi>.h5): the resolved slip is then the filtered file's (cgd-coarse --summarise FILE).
+#        data/filtered/<box>_phi<phi>.h5, of this profile's box: checked): the resolved slip is then the filtered
+#        file's (cgd-coarse --summarise FILE, over the filter's window); or, without perfect, with the
+#        resolved_phi<phi>.h5 an earlier call left there.
 # Closures (the run directory's label):
 #   micro    the scene's micro law (Beetstra), no correction;
 #   radl     radl2014 with the paper's c_corr(alpha), as the pipeline runs it;
@@ -54,7 +56,21 @@ say() { echo "[figure3] $*" >&2; }
 # (filtered_phi<phi>.h5) in OUT/figure3_c<CELLS>: its filtered file alone (the shipped data/filtered/<box>_phi<phi>.h5,
 # copied there) stands in for a run directory that is gone
 for phi in "${phis[@]}"; do
-  [ -f "$out/generate/phi$phi/DONE" ] || [ -f "$dir/filtered_phi$phi.h5" ] && continue
+  [ -f "$out/generate/phi$phi/DONE" ] && continue
+  if [ -f "$dir/filtered_phi$phi.h5" ]; then
+    # a copied file must be of this profile's box (its width in d_p) and solids fraction
+    /usr/bin/python3 - "$dir/filtered_phi$phi.h5" "$box_dp" "$phi" <<'PY' || exit 2
+import sys, h5py
+path, box_dp, phi = sys.argv[1], float(sys.argv[2]), float(sys.argv[3])
+p = h5py.File(path, "r")["params"].attrs
+width = p["box_size_m"][0] / p["diameter_m"]
+if abs(width / box_dp - 1) > 0.01 or abs(p["solids_fraction"] - phi) > 1e-9:
+    sys.exit(f"figure3_box.sh: {path} is a run of a {width:.0f} d_p box at <phi> = {p['solids_fraction']:g}, "
+             f"not this profile's {box_dp:.0f} d_p at {phi:g}")
+PY
+    continue
+  fi
+  [ -f "$dir/resolved_phi$phi.h5" ] && [[ " ${closures[*]} " != *" perfect "* ]] && continue
   echo "figure3_box.sh: $out/generate/phi$phi is not a finished run (and $dir has not its filtered_phi$phi.h5," \
     "from an earlier call or copied from data/filtered/)" >&2
   exit 2

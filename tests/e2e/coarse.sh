@@ -11,7 +11,8 @@
 #    each snapshot equals the series' slip_velocity at that time (to round-off: the same average, <eps u>/<eps> minus
 #    the particles' mean velocity), and the summary is the time-weighted mean of those, recomputed here;
 #    --reference FILTERED.h5 compares a coarse run with it; refusals (exit 2, nothing written): --from-tref with a
-#    file, a file that is not a filtered file, a wrong --reference file (before the run).
+#    file, a file that is not a filtered file, a filtered file of two runs, too few snapshots for the batches, the
+#    input as its own -o, a wrong --reference file (before the run).
 # Environment (set by CTest): CGD_SOURCE_DIR, CGD_BINARY_DIR.
 set -u
 source_dir=${CGD_SOURCE_DIR:-$(cd "$(dirname "$0")/../.." && pwd)}
@@ -107,7 +108,15 @@ assert abs(c['relative_error'] - (c['slip_over_ut'] / f['slip_over_ut'] - 1)) < 
 "$coarse" --summarise "$tmp/genf.h5" --from-tref 0.5 -o "$tmp/nothing.h5" >/dev/null 2>"$tmp/err"; st=$?
 [ $st -eq 2 ] && [ ! -e "$tmp/nothing.h5" ] && grep -q "from-tref" "$tmp/err" && echo "ok   --summarise FILTERED.h5 --from-tref is refused (exit 2): the window is the filter's" || fail "--from-tref with a file: $st"
 "$coarse" --summarise "$tmp/genf/series.h5" -o "$tmp/nothing.h5" >/dev/null 2>"$tmp/err"; st=$?
-[ $st -eq 2 ] && [ ! -e "$tmp/nothing.h5" ] && grep -q "series.h5" "$tmp/err" && echo "ok   --summarise of a file that is not a filtered file is refused (exit 2): $(head -n 1 "$tmp/err" | head -c 160)" || fail "--summarise series.h5: $st"
+[ $st -eq 2 ] && [ ! -e "$tmp/nothing.h5" ] && grep -q "not a filtered file" "$tmp/err" && echo "ok   --summarise of a file that is not a filtered file is refused (exit 2): $(head -n 1 "$tmp/err" | head -c 160)" || fail "--summarise series.h5: $st"
+"$filter" "$tmp/genf" "$tmp/gen" --from-tref 0.25 --quiet -o "$tmp/pooled.h5" >/dev/null 2>&1 || fail "cgd-filter of two runs"
+"$coarse" --summarise "$tmp/pooled.h5" -o "$tmp/nothing.h5" >/dev/null 2>"$tmp/err"; st=$?
+[ $st -eq 2 ] && [ ! -e "$tmp/nothing.h5" ] && grep -q "2 runs" "$tmp/err" && echo "ok   --summarise of a filtered file of two runs is refused (exit 2): $(head -n 1 "$tmp/err" | head -c 160)" || fail "--summarise of a pooled file: $st"
+"$coarse" --summarise "$tmp/genf.h5" --batches 9 -o "$tmp/nothing.h5" >/dev/null 2>"$tmp/err"; st=$?
+[ $st -eq 2 ] && [ ! -e "$tmp/nothing.h5" ] && grep -q "fewer --batches" "$tmp/err" && echo "ok   --summarise FILTERED.h5 with too few snapshots for the batches is refused (exit 2)" || fail "--summarise, too few snapshots: $st"
+cp "$tmp/genf.h5" "$tmp/genf_copy.h5"
+"$coarse" --summarise "$tmp/genf_copy.h5" -o "$tmp/genf_copy.h5" --force >/dev/null 2>"$tmp/err"; st=$?
+[ $st -eq 2 ] && cmp -s "$tmp/genf.h5" "$tmp/genf_copy.h5" && echo "ok   --summarise FILTERED.h5 -o FILTERED.h5 --force is refused (exit 2), the file untouched" || fail "--summarise over its own input: $st"
 
 # restart: half, then continue to the end, against the uninterrupted run
 "$coarse" "$scene" "${small[@]}" --set particles.parcel_size=2 --set run.end_time_tref=0.5 -o "$tmp/half" >/dev/null 2>&1 || fail "half run"
@@ -130,6 +139,6 @@ expect_bad too_few_parcels "at least 100" -- "$scene" "${small[@]}" --set partic
 expect_bad empty_window "must be before run.end_time" -- "$scene" "${small[@]}" --set run.end_time_tref=0.2
 expect_bad missing_model "drag_model" -- "$scene" "${small[@]}" --model "$tmp/nope.h5"
 expect_bad missing_reference "--reference" -- "$scene" "${small[@]}" --reference "$tmp/nope"
-expect_bad reference_not_filtered "series.h5" -- "$scene" "${small[@]}" --reference "$tmp/genf/series.h5"
+expect_bad reference_not_filtered "not a filtered file" -- "$scene" "${small[@]}" --reference "$tmp/genf/series.h5"
 [ $failures -eq 0 ] && echo "all cgd-coarse checks passed" || echo "$failures cgd-coarse check(s) failed"
 exit $((failures > 0))
