@@ -21,6 +21,22 @@ std::string num(double v, int precision = 4) {
   o << v;
   return o.str();
 }
+
+/// The slip's time average over [start, the last row] with `batches` batch means into s.slip, and the drift
+/// between the window's halves (each with max(2, batches/2) batch means) into s.drift, s.drift_stderr: what
+/// summarise_run does with series rows and summarise_filtered with snapshots. std::invalid_argument from
+/// window_average when the rows are too few.
+void average_slip(const std::vector<double>& t, const std::vector<double>& slip, double start, int batches,
+                  SlipSummary& s) {
+  const double end = t.empty() ? start : t.back() * (1 + 1e-12) + 1e-300;  // the whole run after the start
+  s.slip = window_average(t, slip, start, end, batches);
+  const int half_batches = std::max(2, batches / 2);
+  const double mid = 0.5 * (s.slip.start_s + s.slip.end_s);
+  const WindowAverage first = window_average(t, slip, start, mid, half_batches);
+  const WindowAverage second = window_average(t, slip, mid, end, half_batches);
+  s.drift = second.mean - first.mean;
+  s.drift_stderr = std::hypot(first.standard_error, second.standard_error);
+}
 }  // namespace
 
 void check_coarse_scene(const Scene& s, int ranks) {
@@ -70,14 +86,7 @@ SlipSummary summarise_run(const std::string& run_dir, double u_t, double start, 
   s.run_dir = run_dir;
   s.u_t_m_s = u_t;
   try {
-    const double end = t.empty() ? start : t.back() * (1 + 1e-12) + 1e-300;  // the whole run after the start
-    s.slip = window_average(t, slip, start, end, batches);
-    const int half_batches = std::max(2, batches / 2);
-    const double mid = 0.5 * (s.slip.start_s + s.slip.end_s);
-    const WindowAverage first = window_average(t, slip, start, mid, half_batches);
-    const WindowAverage second = window_average(t, slip, mid, end, half_batches);
-    s.drift = second.mean - first.mean;
-    s.drift_stderr = std::hypot(first.standard_error, second.standard_error);
+    average_slip(t, slip, start, batches, s);
   } catch (const std::invalid_argument& e) {
     throw InputError(path + ": cannot average the slip: " + e.what());
   }
@@ -132,14 +141,7 @@ SlipSummary summarise_filtered(const std::string& path, int batches, Scene* scen
   s.run_dir = path;
   s.u_t_m_s = u_t;
   try {
-    const double start = n ? t.front() : 0, end = n ? t.back() * (1 + 1e-12) + 1e-300 : 0;
-    s.slip = window_average(t, slip, start, end, batches);
-    const int half_batches = std::max(2, batches / 2);
-    const double mid = 0.5 * (s.slip.start_s + s.slip.end_s);
-    const WindowAverage first = window_average(t, slip, start, mid, half_batches);
-    const WindowAverage second = window_average(t, slip, mid, end, half_batches);
-    s.drift = second.mean - first.mean;
-    s.drift_stderr = std::hypot(first.standard_error, second.standard_error);
+    average_slip(t, slip, n ? t.front() : 0, batches, s);
   } catch (const std::invalid_argument& e) {
     throw InputError(path + ": cannot average the whole box's slip over its " + std::to_string(n) + " snapshots: " +
                      e.what() + " (fewer --batches)");
@@ -150,10 +152,6 @@ SlipSummary summarise_filtered(const std::string& path, int batches, Scene* scen
   s.core_seconds_per_simulated_second = 0;
   if (scene_out) *scene_out = scene;
   return s;
-}
-
-SlipSummary summarise_reference_or_filtered(const std::string& path, int batches) {
-  return std::filesystem::is_regular_file(path) ? summarise_filtered(path, batches) : summarise_reference(path, batches);
 }
 
 Comparison compare(const SlipSummary& coarse, const SlipSummary& reference) {

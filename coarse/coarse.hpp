@@ -67,10 +67,6 @@ SlipSummary summarise_reference(const std::string& run_dir, int batches = 10);
 /// `scene_out`: where given, the file's scene (for write_summary).
 SlipSummary summarise_filtered(const std::string& path, int batches = 10, Scene* scene_out = nullptr);
 
-/// summarise_filtered for a regular file, summarise_reference for a run directory: what --reference and
-/// --summarise accept.
-SlipSummary summarise_reference_or_filtered(const std::string& path, int batches = 10);
-
 /// The comparison of a coarse run with a resolved reference.
 struct Comparison {
   SlipSummary coarse, reference;

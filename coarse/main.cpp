@@ -118,9 +118,11 @@ int main(int argc, char** argv) {
       throw cgd::InputError("--reference " + reference + ": no series.h5 there (expected a run directory of cgd-generate "
                             "or its filtered file)");
     if (batches < 2) throw cgd::InputError("--batches: " + std::to_string(batches) + " is not allowed (>= 2)");
-    // a filtered file is read now, so that a wrong one is refused before the run, not after it
+    // a filtered file is summarised now (on every rank, so that all refuse a wrong one together), before the run,
+    // and its summary kept for the comparison after it
+    std::optional<cgd::coarse::SlipSummary> filtered_reference;
     if (!reference.empty() && std::filesystem::is_regular_file(reference))
-      (void)cgd::coarse::summarise_filtered(reference, batches);
+      filtered_reference = cgd::coarse::summarise_filtered(reference, batches);
     cgd::RunSettings settings;
     settings.output_dir =
         options.output_dir.empty() ? cgd::default_run_directory("coarse", options.scene_path) : options.output_dir;
@@ -138,7 +140,8 @@ int main(int argc, char** argv) {
         const auto s = cgd::coarse::summarise_run(settings.output_dir, u_t, scene.run.sampling_start_s, ranks, batches);
         std::optional<cgd::coarse::Comparison> cmp;
         if (!reference.empty())
-          cmp = cgd::coarse::compare(s, cgd::coarse::summarise_reference_or_filtered(reference, batches));
+          cmp = cgd::coarse::compare(s, filtered_reference ? *filtered_reference
+                                                           : cgd::coarse::summarise_reference(reference, batches));
         // "model": the file is in the scene's drag_model; "model-raw": the model with c_corr off (parcel fit)
         std::string drag = to_string(scene.fluid->drag);
         if (scene.fluid->drag == cgd::DragLaw::Model && !scene.fluid->parcel_correction) drag = "model-raw";
