@@ -14,7 +14,7 @@ Then, pooled per box:
   * `cgd-fit --grid-table 4` on the shipped files writes the 4-cell grid's measured H_grid as a table; it must
     equal the pooled H of the per-snapshot sums, recomputed here, in every bin with at least 100 samples (the
     table's --min-count), to 1e-12 (both are the same sums in another order: round-off only);
-  * cgd-fit with the profile's FIT_ARGS (half: `--operator grid --width-exponent fit`; paper: `--operator grid`)
+  * cgd-fit with the profile's FIT_ARGS (`--operator grid --width-exponent fit`, both boxes)
     runs on them and fits every grid.
 And per file, as the reference a coarse run is checked against (`cgd-coarse --summarise FILE`): the resolved slip from
 the file's whole box agrees with the slip the run's own series gave over the same window (SERIES_SLIP, measured when
@@ -36,7 +36,7 @@ import numpy as np
 # per box (the file name's prefix): the coarse grids its profile's cgd-filter writes (Makefile.pipeline FILTER_GRIDS)
 # and its profile's cgd-fit options (FIT_ARGS); files of one box are pooled, never two boxes together
 PROFILES = {"half": dict(grids=(12, 8, 6, 5, 4, 3), fit_args=("--operator", "grid", "--width-exponent", "fit")),
-            "paper": dict(grids=(16, 12, 8, 6, 5, 4), fit_args=("--operator", "grid"))}
+            "paper": dict(grids=(16, 12, 8, 6, 5, 4), fit_args=("--operator", "grid", "--width-exponent", "fit"))}
 MIN_COUNT = 100  # cgd-fit's default --min-count, which --grid-table applies
 # the resolved runs' slip/u_t over 20-50 t_ref from their series.h5 (cgd-coarse --summarise RUN_DIR --from-tref 20),
 # measured when each run ended; a file shipped later adds its run's value here
