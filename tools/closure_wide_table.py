@@ -1,7 +1,9 @@
 #!/usr/bin/python3
 """The closure experiments' table (scripts/closure_wide_filter.sh, scripts/closure_drift.sh; docs/closure.md).
 
-usage: tools/closure_wide_table.py DIR [--plot PNG]
+usage: tools/closure_wide_table.py DIR [--plot PNG] [--rms-alphas LIST]
+  --rms-alphas LIST: the per-closure rms and worst over these α only (e.g. 3,4,6,8: the paper's Figure 3 claim
+    leaves α = 2 out); the table lists every α
   --plot PNG: also the picture (the paper's Figure 3 as errors): per phi a panel, the error of the slip against alpha
   per closure (mean over the seeds +- its standard error), the resolved run's own +- standard error shaded.
 
@@ -36,6 +38,7 @@ LABELS = {
     "perfect": "perfect (the grid's own phi-bar table)",
     "model": "model fitted in this box",
     "modelraw": "model fitted in this box, c_corr off",
+    "modeln1": "model fitted in this box at n = 1, c_corr off",
 }
 
 
@@ -113,10 +116,21 @@ def plot(path, refs, ref_err, table):
 
 def main(argv):
     plot_path = None
-    if len(argv) == 4 and argv[2] == "--plot":
-        plot_path = argv[3]
-        argv = argv[:2]
-    if len(argv) != 2:
+    rms_alphas = None
+    rest = argv[2:]
+    argv = argv[:2]
+    while len(rest) >= 2 and rest[0] in ("--plot", "--rms-alphas"):
+        if rest[0] == "--plot":
+            plot_path = rest[1]
+        else:
+            try:
+                rms_alphas = {int(a) for a in rest[1].split(",")}
+            except ValueError:
+                print(f"closure_wide_table.py: --rms-alphas {rest[1]!r} is not a comma-separated list of integers",
+                      file=sys.stderr)
+                return 2
+        rest = rest[2:]
+    if len(argv) != 2 or rest:
         print(__doc__, file=sys.stderr)
         return 2
     d = argv[1]
@@ -146,11 +160,13 @@ def main(argv):
         n = len(e)
         mean = sum(e) / n
         se = (math.sqrt(sum((x - mean) ** 2 for x in e) / (n - 1)) / math.sqrt(n)) if n > 1 else runs[(phi, c, alpha)][0][1]
-        per_closure.setdefault(c, []).append(mean)
+        if rms_alphas is None or alpha in rms_alphas:
+            per_closure.setdefault(c, []).append(mean)
         table[(phi, c, alpha)] = (mean, se, n)
         print(f"| {phi} | {refs[phi]:.3f} | {closure_label(c)} | {alpha} | {100 * mean:+.1f} ± {100 * se:.1f} % | {n} |")
     print()
-    print("| closure | rms of the means | worst | configurations |")
+    over = "" if rms_alphas is None else f", α = {','.join(str(a) for a in sorted(rms_alphas))}"
+    print(f"| closure | rms of the means{over} | worst | configurations |")
     print("|---|---|---|---|")
     for c in sorted(per_closure, key=closure_order):
         m = per_closure[c]

@@ -56,6 +56,18 @@ with tempfile.TemporaryDirectory() as d:
     check(out.index("phi-bar table, held out, the 4-cell") < out.index("radl2014 at") < out.index("perfect table of the 4-cell"),
           "a named closure at another filter is listed beside its base")
     check("0.10" not in out, "a phi without a reference is left out")
+    # --rms-alphas: the rms over the listed alphas only (an alpha = 2 run of g4 at -20 % is listed, not in the rms)
+    summary(os.path.join(d, "phi0.05_a2_g4_s1", "summary.h5"), 0.80, 0.01)
+    p = subprocess.run([sys.executable, tool, d, "--rms-alphas", "3,4,6,8"], capture_output=True, text=True)
+    check(p.returncode == 0 and "| 0.05 | 1.000 | perfect table of the 4-cell grid | 2 | -20.0 ± 1.0 % | 1 |" in p.stdout,
+          "--rms-alphas: every alpha is still listed")
+    check("| perfect table of the 4-cell grid | 8.0 % | -8.0 % | 1 |" in p.stdout and "α = 3,4,6,8" in p.stdout,
+          "--rms-alphas 3,4,6,8: g4's rms over alpha = 3 alone (8.0 %), the alpha = 2 run left out")
+    p = subprocess.run([sys.executable, tool, d], capture_output=True, text=True)
+    check("| perfect table of the 4-cell grid | 15.2 % | -20.0 % | 2 |" in p.stdout,
+          "without --rms-alphas: g4's rms over alpha = 2 and 3 (sqrt((20^2 + 8^2)/2) = 15.2 %)")
+    p = subprocess.run([sys.executable, tool, d, "--rms-alphas", "3;4"], capture_output=True, text=True)
+    check(p.returncode == 2 and "--rms-alphas" in p.stderr, "--rms-alphas with a bad list: exit 2 with a message")
     png = os.path.join(d, "figure.png")
     p = subprocess.run([sys.executable, tool, d, "--plot", png], capture_output=True, text=True)
     check(p.returncode == 0 and os.path.getsize(png) > 0, f"--plot writes the picture ({p.stderr.strip()})")
