@@ -96,6 +96,8 @@ def plot(path, refs, ref_err, table):
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
     phis = sorted({k[0] for k in table}, key=float)
+    # one colour per closure in every panel (the closures differ between panels when some were not run at a phi)
+    colour = {c: f"C{i % 10}" for i, c in enumerate(sorted({k[1] for k in table}, key=closure_order))}
     fig, axes = plt.subplots(1, len(phis), figsize=(5.2 * len(phis), 4.0), squeeze=False)
     for ax, phi in zip(axes[0], phis):
         band = 100 * ref_err[phi] / refs[phi]
@@ -105,7 +107,7 @@ def plot(path, refs, ref_err, table):
             alphas = sorted(a for (p, cc, a) in table if p == phi and cc == c)
             m = [100 * table[(phi, c, a)][0] for a in alphas]
             e = [100 * table[(phi, c, a)][1] for a in alphas]
-            ax.errorbar(alphas, m, yerr=e, marker="o", ms=4, capsize=3, label=closure_label(c))
+            ax.errorbar(alphas, m, yerr=e, marker="o", ms=4, capsize=3, color=colour[c], label=closure_label(c))
         ax.set_xlabel("parcel size α")
         ax.set_ylabel("error of the slip, %")
         ax.set_title(f"⟨φ⟩ = {phi}, resolved slip {refs[phi]:.3f} u_t")
