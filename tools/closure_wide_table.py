@@ -15,7 +15,7 @@ Delta = r cells, e.g. radlr2) or <table|drift><held|own><G> (the table of the gr
 tableheld4, as CELLS=8 TABLE_CELLS=4 scripts/closure_drift.sh uses it). Prints a markdown table: per phi, closure and
 alpha, the relative error of the slip against the resolved run, mean over the seeds +- the standard error of that
 mean (the seeds' scatter / sqrt(n); one seed: the run's own batch-means error), and the seeds' count; then per
-closure the rms and the worst of the means over every phi and alpha.
+closure the rms and the worst of the means over every phi and alpha (with --rms-alphas: over those alphas only).
 """
 import glob
 import math
@@ -97,7 +97,7 @@ def plot(path, refs, ref_err, table):
     import matplotlib.pyplot as plt
     phis = sorted({k[0] for k in table}, key=float)
     # one colour per closure in every panel (the closures differ between panels when some were not run at a phi)
-    colour = {c: f"C{i % 10}" for i, c in enumerate(sorted({k[1] for k in table}, key=closure_order))}
+    colour = {c: f"C{i % 10}" for i, c in enumerate(sorted({k[1] for k in table}, key=lambda c: (closure_order(c), c)))}
     fig, axes = plt.subplots(1, len(phis), figsize=(5.2 * len(phis), 4.0), squeeze=False)
     for ax, phi in zip(axes[0], phis):
         band = 100 * ref_err[phi] / refs[phi]

@@ -67,7 +67,7 @@ with tempfile.TemporaryDirectory() as d:
     check("| perfect table of the 4-cell grid | 15.2 % | -20.0 % | 2 |" in p.stdout,
           "without --rms-alphas: g4's rms over alpha = 2 and 3 (sqrt((20^2 + 8^2)/2) = 15.2 %)")
     p = subprocess.run([sys.executable, tool, d, "--rms-alphas", "3;4"], capture_output=True, text=True)
-    check(p.returncode == 2 and "--rms-alphas" in p.stderr, "--rms-alphas with a bad list: exit 2 with a message")
+    check(p.returncode == 2 and "not a comma-separated list" in p.stderr, "--rms-alphas with a bad list: exit 2 with its message")
     png = os.path.join(d, "figure.png")
     p = subprocess.run([sys.executable, tool, d, "--plot", png], capture_output=True, text=True)
     check(p.returncode == 0 and os.path.getsize(png) > 0, f"--plot writes the picture ({p.stderr.strip()})")
