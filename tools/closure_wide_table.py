@@ -17,6 +17,7 @@ alpha, the relative error of the slip against the resolved run, mean over the se
 mean (the seeds' scatter / sqrt(n); one seed: the run's own batch-means error), and the seeds' count; then per
 closure the rms and the worst of the means over every phi and alpha (with --rms-alphas: over those alphas only).
 """
+import argparse
 import glob
 import math
 import os
@@ -79,15 +80,16 @@ def closure_label(c):
 
 
 def closure_order(c):
-    """The named closures first in LABELS's order, then g<G> and r<r> by kind and number."""
+    """The named closures first in LABELS's order, then g<G> and r<r> by kind and number, then any other name; ties
+    by the name, so that every listing (and the picture's colours) is the same from run to run."""
     if c in LABELS:
-        return (0, list(LABELS).index(c), 0.0)
+        return (0, list(LABELS).index(c), 0.0, c)
     v = named_variant(c)
     if v:
-        return (0, list(LABELS).index(v[0]), v[2])
+        return (0, list(LABELS).index(v[0]), v[2], c)
     if re.fullmatch(r"[gr][0-9.]+", c):
-        return (1 if c[0] == "g" else 2, 0, float(c[1:]))
-    return (3, 0, 0.0)
+        return (1 if c[0] == "g" else 2, 0, float(c[1:]), c)
+    return (3, 0, 0.0, c)
 
 
 def plot(path, refs, ref_err, table):
@@ -97,7 +99,7 @@ def plot(path, refs, ref_err, table):
     import matplotlib.pyplot as plt
     phis = sorted({k[0] for k in table}, key=float)
     # one colour per closure in every panel (the closures differ between panels when some were not run at a phi)
-    colour = {c: f"C{i % 10}" for i, c in enumerate(sorted({k[1] for k in table}, key=lambda c: (closure_order(c), c)))}
+    colour = {c: f"C{i % 10}" for i, c in enumerate(sorted({k[1] for k in table}, key=closure_order))}
     fig, axes = plt.subplots(1, len(phis), figsize=(5.2 * len(phis), 4.0), squeeze=False)
     for ax, phi in zip(axes[0], phis):
         band = 100 * ref_err[phi] / refs[phi]
@@ -116,26 +118,21 @@ def plot(path, refs, ref_err, table):
     fig.savefig(path, dpi=120)
 
 
+def alpha_list(text):
+    """--rms-alphas: a comma-separated list of integers -> their set."""
+    try:
+        return {int(a) for a in text.split(",")}
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a comma-separated list of integers")
+
+
 def main(argv):
-    plot_path = None
-    rms_alphas = None
-    rest = argv[2:]
-    argv = argv[:2]
-    while len(rest) >= 2 and rest[0] in ("--plot", "--rms-alphas"):
-        if rest[0] == "--plot":
-            plot_path = rest[1]
-        else:
-            try:
-                rms_alphas = {int(a) for a in rest[1].split(",")}
-            except ValueError:
-                print(f"closure_wide_table.py: --rms-alphas {rest[1]!r} is not a comma-separated list of integers",
-                      file=sys.stderr)
-                return 2
-        rest = rest[2:]
-    if len(argv) != 2 or rest:
-        print(__doc__, file=sys.stderr)
-        return 2
-    d = argv[1]
+    ap = argparse.ArgumentParser(prog="closure_wide_table.py", description=__doc__.split("\n")[0])
+    ap.add_argument("dir", help="the directory of resolved_phi<phi>.h5 and the coarse runs")
+    ap.add_argument("--plot", metavar="PNG", help="also the picture")
+    ap.add_argument("--rms-alphas", type=alpha_list, metavar="LIST", help="the rms and worst over these alphas only")
+    args = ap.parse_args(argv[1:])  # exit 2 with argparse's message on bad arguments
+    plot_path, rms_alphas, d = args.plot, args.rms_alphas, args.dir
     ref_err = {}
     refs = {}
     for p in glob.glob(os.path.join(d, "resolved_phi*.h5")):
