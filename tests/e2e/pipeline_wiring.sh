@@ -5,7 +5,8 @@
 # --operator grid, the laws (radl2014: --set fluid.drag=radl2014; perfect: cgd-fit --grid-table, --model
 # perfect_c<cells>.h5, c_corr off for alpha > 1; drift: cgd-fit --drift-table, fluid.drag = drift), the model alpha > 1 runs' reuse of their modelraw twins, the
 # resolved summaries (cgd-coarse --summarise) feeding the study; and the refusals (make errors) of an unknown drag
-# label, an EXTRA_RESOLVED entry outside PHIS, a perfect closure on a grid the filter did not evaluate, a bad seed.
+# label, an EXTRA_RESOLVED entry outside PHIS, a perfect closure on a grid the filter did not evaluate, a bad seed;
+# a profile's own EXTRA_RESOLVED / ALPHA1_PHIS entries outside a smaller PHIS left out (PARCEL_FIT off without alpha = 1).
 # Environment (set by CTest): CGD_SOURCE_DIR.
 source "$(dirname "$0")/lib/prologue.sh"
 mkdir -p "$tmp/bin"
@@ -74,6 +75,20 @@ grep -q "coarse/phi0.20_c4_a3_micro_s1 .*--set contact.gamma_star=1e-3$" <<<"$n"
   ok "half: PHI_SET_0.20 reaches the coarse runs at 0.20 only" || fail "half: PHI_SET_0.20 of the coarse runs"
 n=$(mk PROFILE=half PHIS=0.05,0.20 EXTRA_RESOLVED= ALPHA1_PHIS=0.05 PHI_SET_0.20= generate)
 ! grep -q "gamma_star=1e-3" <<<"$n" && ok "half: PHI_SET_0.20= (empty) drops it" || fail "half: an empty PHI_SET_0.20 still sets"
+
+# ---- a profile's defaults follow PHIS: one dense half-box run needs no other override ----
+n=$(mk PROFILE=half PHIS=0.30 all); s=$?
+[ $s -eq 0 ] && grep -q "the profile's EXTRA_RESOLVED=0.05_s2: 0.05_s2 left out" <<<"$n" &&
+  grep -q "the profile's ALPHA1_PHIS=0.02,0.05: 0.02 0.05 left out" <<<"$n" && grep -q "PARCEL_FIT=0" <<<"$n" &&
+  grep -q -- "cgd-filter $tmp/out/generate/phi0.30  --from-tref 20 " <<<"$n" && ! grep -q "_a1_\|modelraw\|phi0.05" <<<"$n" &&
+  ok "half PHIS=0.30: the profile's 0.05_s2 and alpha = 1 solids fractions left out with a note, no parcel fit" ||
+  fail "half PHIS=0.30: status $s"
+e=$(mk PROFILE=half PHIS=0.30 ALPHA1_PHIS=0.05 all); s=$?
+[ $s -ne 0 ] && grep -q "ALPHA1_PHIS=0.05: every entry must be one of PHIS=0.30" <<<"$e" &&
+  ok "half PHIS=0.30: an ALPHA1_PHIS given outside PHIS is still refused" || fail "half PHIS=0.30 ALPHA1_PHIS=0.05: $s"
+e=$(mk PROFILE=half PHIS=0.30 EXTRA_RESOLVED=0.05_s2 all); s=$?
+[ $s -ne 0 ] && grep -q "EXTRA_RESOLVED entry '0.05_s2'" <<<"$e" &&
+  ok "half PHIS=0.30: an EXTRA_RESOLVED given outside PHIS is still refused" || fail "half PHIS=0.30 EXTRA_RESOLVED=0.05_s2: $s"
 
 # ---- demo defaults and help ----
 n=$(mk PROFILE=demo all)
