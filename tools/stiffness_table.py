@@ -1,11 +1,12 @@
 #!/usr/bin/python3
 """The contact-stiffness table of scripts/stiffness_study.sh: for every configuration directory
-OUT/g<gamma*>_phi<phi>/ (a Makefile.pipeline OUT holding generate/phi<phi>/, study/resolved/phi<phi>.h5 and
-filter/filtered.h5) one row with
+OUT/g<gamma*>_phi<phi>/ or OUT/g<gamma*>_t<t*>_phi<phi>/ (a DEM step t* = dt/t_c other than the scene's; a
+Makefile.pipeline OUT holding generate/phi<phi>/, study/resolved/phi<phi>.h5 and filter/filtered.h5) one row with
 
   * the slip <u_slip,y>/u_t over the filter window with its batch-means error and drift (the study's
     resolved summary, cgd-coarse --summarise) and its distance from the stiffest run of the same <phi>
-    in standard errors (z = (s - s_ref) / sqrt(e^2 + e_ref^2));
+    in standard errors (z = (s - s_ref) / sqrt(e^2 + e_ref^2); the stiffest: the smallest gamma*, and of those
+    the smallest t*);
   * H = 1 - beta_bar/beta_micro at two box-filter widths and on one coarse grid's own operator: at the phi-bar
     bin holding most samples (with its block-bootstrap standard error), and chi2/dof of H against the stiffest
     run over every bin both populate (>= --min-count samples in each): chi2/dof ~ 1 means the same H within the
@@ -34,6 +35,18 @@ import numpy as np
 def fail(msg):
     print(f"stiffness_table.py: {msg}", file=sys.stderr)
     sys.exit(2)
+
+
+def config_phi(name):
+    """The <phi> of a configuration directory's name g<gamma*>_phi<phi> or g<gamma*>_t<t*>_phi<phi>; None for
+    another name."""
+    m = re.match(r"g[0-9.e+-]+(?:_t[0-9.e+-]+)?_phi([0-9.]+)$", name)
+    return m.group(1) if m else None
+
+
+def reference_key(row):
+    """The stiffest run of a <phi>, the table's reference: the smallest gamma*, and of those the smallest t*."""
+    return (row["gamma"], row["t_star"])
 
 
 def overlaps(snapshot_paths):
@@ -112,6 +125,7 @@ def one_config(d, phi_name, widths, grid, min_count):
         steps = s["step"][:]
         rebuilds = s["neighbor_rebuilds"][:]
         row["gamma"] = float(p["gamma_star"]) if "gamma_star" in p else float("nan")
+        row["t_star"] = float(p["t_star"]) if "t_star" in p else float("nan")
         row["n"] = int(p["particle_count"])
         row["dt"] = float(p["dt_dem_s"])
         row["t_ref"] = float(p["t_ref_s"])
@@ -170,29 +184,29 @@ def main():
     widths = [float(w) for w in args.widths.split(",")]
     rows = []
     for d in sorted(glob.glob(os.path.join(args.out, "g*_phi*"))):
-        m = re.match(r"g([0-9.e+-]+)_phi([0-9.]+)$", os.path.basename(d))
-        if not m or not os.path.isdir(d):
+        phi_name = config_phi(os.path.basename(d))
+        if phi_name is None or not os.path.isdir(d):
             continue
-        r = one_config(d, m.group(2), widths, args.grid, args.min_count)
+        r = one_config(d, phi_name, widths, args.grid, args.min_count)
         if r is None:
             print(f"stiffness_table.py: {d}: not complete yet (skipped)", file=sys.stderr)
             continue
-        r["phi_name"] = m.group(2)
+        r["phi_name"] = phi_name
         rows.append(r)
     if not rows:
         fail(f"{args.out}: no complete configuration g<gamma>_phi<phi>/")
-    rows.sort(key=lambda r: (float(r["phi_name"]), r["gamma"]))
+    rows.sort(key=lambda r: (float(r["phi_name"]),) + reference_key(r))
     keys = sorted({k for r in rows for k in r["H"]}, key=lambda k: (k[0] != "box", k[1]))
-    head = ["<phi>", "gamma*", "slip/u_t", "z vs stiffest", "drift/u_t"]
+    head = ["<phi>", "gamma*", "t*", "slip/u_t", "z vs stiffest", "drift/u_t"]
     for k in keys:
         head += [f"H {label(k)} (modal phi-bar)", f"chi2/dof vs stiffest, {label(k)}"]
     head += ["mean overlap/d", "max overlap/d", "contacts/particle", "steps", "steps/rebuild",
              "PCG iterations", "wall s", "wall ns/particle-step"]
     table = []
     for r in rows:
-        ref = min((q for q in rows if q["phi_name"] == r["phi_name"]), key=lambda q: q["gamma"])
+        ref = min((q for q in rows if q["phi_name"] == r["phi_name"]), key=reference_key)
         z = (r["slip"] - ref["slip"]) / math.hypot(r["slip_err"], ref["slip_err"]) if r is not ref else 0.0
-        line = [r["phi_name"], f"{r['gamma']:.0e}", f"{r['slip']:.3f} ± {r['slip_err']:.3f}",
+        line = [r["phi_name"], f"{r['gamma']:.0e}", f"{r['t_star']:g}", f"{r['slip']:.3f} ± {r['slip_err']:.3f}",
                 "(ref)" if r is ref else f"{z:+.1f}", f"{r['drift']:+.3f} ± {r['drift_err']:.3f}"]
         for k in keys:
             b = r["H"].get(k)
@@ -216,7 +230,7 @@ def main():
             f"(>= {args.min_count} samples each; ~1: the same H within errors). Overlaps over the touching pairs of "
             "the window's snapshots (max also over every series row). wall: the run's own wall time on one rank; "
             "the runs shared the 2-core machine with other work, so wall times are upper bounds; the DEM step count "
-            "scales as 1/gamma* (k_n ~ 1/gamma*^2, dt ~ t_c ~ gamma*) and is exact.")
+            "scales as 1/(gamma* t*) (k_n ~ 1/gamma*^2, dt = t* t_c, t_c ~ gamma*) and is exact.")
     txt = ["  |  ".join(head)] + ["  |  ".join(l) for l in table] + ["", note]
     md = ["| " + " | ".join(head) + " |", "|" + "---|" * len(head)] + ["| " + " | ".join(l) + " |" for l in table]
     md += ["", note]
