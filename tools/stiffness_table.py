@@ -1,12 +1,14 @@
 #!/usr/bin/python3
 """The contact-stiffness table of scripts/stiffness_study.sh: for every configuration directory
-OUT/g<gamma*>_phi<phi>/ or OUT/g<gamma*>_t<t*>_phi<phi>/ (a DEM step t* = dt/t_c other than the scene's; a
-Makefile.pipeline OUT holding generate/phi<phi>/, study/resolved/phi<phi>.h5 and filter/filtered.h5) one row with
+OUT/g<gamma*>[_t<t*>][_s<seed>]_phi<phi>/ (_t: a DEM step t* = dt/t_c other than the scene's; _s: a realisation
+other than the scene's seed 1; a Makefile.pipeline OUT holding generate/phi<phi>/, study/resolved/phi<phi>.h5 and
+filter/filtered.h5) one row with
 
   * the slip <u_slip,y>/u_t over the filter window with its batch-means error and drift (the study's
     resolved summary, cgd-coarse --summarise) and its distance from the stiffest run of the same <phi>
-    in standard errors (z = (s - s_ref) / sqrt(e^2 + e_ref^2); the stiffest: the smallest gamma*, and of those
-    the smallest t*);
+    in standard errors (z = (s - s_ref) / sqrt(e^2 + e_ref^2); the stiffest: the smallest gamma*, of those the
+    smallest t*, and of those the smallest seed: a second seed of that configuration shows how far two
+    realisations lie apart, by chaos alone);
   * H = 1 - beta_bar/beta_micro at two box-filter widths and on one coarse grid's own operator: at the phi-bar
     bin holding most samples (with its block-bootstrap standard error), and chi2/dof of H against the stiffest
     run over every bin both populate (>= --min-count samples in each): chi2/dof ~ 1 means the same H within the
@@ -38,15 +40,16 @@ def fail(msg):
 
 
 def config_phi(name):
-    """The <phi> of a configuration directory's name g<gamma*>_phi<phi> or g<gamma*>_t<t*>_phi<phi>; None for
-    another name."""
-    m = re.match(r"g[0-9.e+-]+(?:_t[0-9.e+-]+)?_phi([0-9.]+)$", name)
+    """The <phi> of a configuration directory's name g<gamma*>[_t<t*>][_s<seed>]_phi<phi>; None for another
+    name."""
+    m = re.match(r"g[0-9.e+-]+(?:_t[0-9.e+-]+)?(?:_s[0-9]+)?_phi([0-9.]+)$", name)
     return m.group(1) if m else None
 
 
 def reference_key(row):
-    """The stiffest run of a <phi>, the table's reference: the smallest gamma*, and of those the smallest t*."""
-    return (row["gamma"], row["t_star"])
+    """The stiffest run of a <phi>, the table's reference: the smallest gamma*, of those the smallest t*, and of
+    those the smallest seed."""
+    return (row["gamma"], row["t_star"], row["seed"])
 
 
 def overlaps(snapshot_paths):
@@ -126,6 +129,7 @@ def one_config(d, phi_name, widths, grid, min_count):
         rebuilds = s["neighbor_rebuilds"][:]
         row["gamma"] = float(p["gamma_star"]) if "gamma_star" in p else float("nan")
         row["t_star"] = float(p["t_star"]) if "t_star" in p else float("nan")
+        row["seed"] = int(p["seed"]) if "seed" in p else 1
         row["n"] = int(p["particle_count"])
         row["dt"] = float(p["dt_dem_s"])
         row["t_ref"] = float(p["t_ref_s"])
@@ -197,7 +201,7 @@ def main():
         fail(f"{args.out}: no complete configuration g<gamma>_phi<phi>/")
     rows.sort(key=lambda r: (float(r["phi_name"]),) + reference_key(r))
     keys = sorted({k for r in rows for k in r["H"]}, key=lambda k: (k[0] != "box", k[1]))
-    head = ["<phi>", "gamma*", "t*", "slip/u_t", "z vs stiffest", "drift/u_t"]
+    head = ["<phi>", "gamma*", "t*", "seed", "slip/u_t", "z vs stiffest", "drift/u_t"]
     for k in keys:
         head += [f"H {label(k)} (modal phi-bar)", f"chi2/dof vs stiffest, {label(k)}"]
     head += ["mean overlap/d", "max overlap/d", "contacts/particle", "steps", "steps/rebuild",
@@ -206,7 +210,7 @@ def main():
     for r in rows:
         ref = min((q for q in rows if q["phi_name"] == r["phi_name"]), key=reference_key)
         z = (r["slip"] - ref["slip"]) / math.hypot(r["slip_err"], ref["slip_err"]) if r is not ref else 0.0
-        line = [r["phi_name"], f"{r['gamma']:.0e}", f"{r['t_star']:g}", f"{r['slip']:.3f} ± {r['slip_err']:.3f}",
+        line = [r["phi_name"], f"{r['gamma']:.0e}", f"{r['t_star']:g}", str(r["seed"]), f"{r['slip']:.3f} ± {r['slip_err']:.3f}",
                 "(ref)" if r is ref else f"{z:+.1f}", f"{r['drift']:+.3f} ± {r['drift_err']:.3f}"]
         for k in keys:
             b = r["H"].get(k)
@@ -225,7 +229,8 @@ def main():
                  f"{r['wall_s']:.0f}", f"{r['ns_per_ps']:.1f}"]
         table.append(line)
     note = ("slip: mean over the filter window (15-35 t_ref), batch-means standard error; z: distance from the "
-            "stiffest run of the same <phi> in combined standard errors. H: 1 - beta_bar/beta_micro at the phi-bar "
+            "stiffest run of the same <phi> (its first seed) in combined standard errors; a second seed of the "
+            "stiffest run gives the spread between realisations. H: 1 - beta_bar/beta_micro at the phi-bar "
             "bin with most samples, +- its block-bootstrap standard error; chi2/dof over the bins both runs populate "
             f"(>= {args.min_count} samples each; ~1: the same H within errors). Overlaps over the touching pairs of "
             "the window's snapshots (max also over every series row). wall: the run's own wall time on one rank; "

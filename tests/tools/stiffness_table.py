@@ -2,8 +2,8 @@
 """tools/stiffness_table.py against known answers: the overlaps of a hand-placed periodic configuration (a pair
 touching across the box's periodic face at 0.9 d, one at 0.99 d, a free particle: mean overlap 0.055 d, largest
 0.1 d), chi2/dof of H against itself (0) and against a copy shifted by one standard error (0.5: each bin's
-combined error is sqrt(2) sigma), the modal bin, the configuration names (with and without t*) and the reference
-row (the smallest gamma*, then t*).
+combined error is sqrt(2) sigma), the modal bin, the configuration names (with and without t* and seed) and the
+reference row (the smallest gamma*, then t*, then seed).
 usage: /usr/bin/python3 tests/tools/stiffness_table.py SOURCE_DIR"""
 import os
 import sys
@@ -42,9 +42,12 @@ check(c0 == 0.0 and n0 == 2, f"chi2 against itself: {c0} over {n0} bins (0 over 
 check(abs(c1 - 0.5) < 1e-12 and n1 == 2, f"chi2 shifted by one sigma: {c1} (0.5)")
 phi, h, e = st.modal(b)
 check(phi == 0.02 and h == 0.4 and e == 0.02, f"modal bin: phi {phi} H {h} +- {e} (0.02, 0.4, 0.02)")
-names = {"g1e-3_phi0.30": "0.30", "g2e-3_t0.05_phi0.05": "0.05", "g1e-3_t0.05": None, "g1e-3_phi0.30.make.log": None}
+names = {"g1e-3_phi0.30": "0.30", "g2e-3_t0.05_phi0.05": "0.05", "g1e-3_s2_phi0.30": "0.30",
+         "g1e-3_t0.05_s12_phi0.05": "0.05", "g1e-3_s2_t0.05_phi0.05": None, "g1e-3_t0.05": None,
+         "g1e-3_phi0.30.make.log": None}
 got = {n: st.config_phi(n) for n in names}
 check(got == names, f"configuration names: {got}")
-rows = [{"gamma": 2e-3, "t_star": 0.02}, {"gamma": 1e-3, "t_star": 0.05}, {"gamma": 1e-3, "t_star": 0.02}]
-check(min(rows, key=st.reference_key) is rows[2], "the reference: the smallest gamma*, then the smallest t*")
+rows = [{"gamma": 2e-3, "t_star": 0.02, "seed": 1}, {"gamma": 1e-3, "t_star": 0.05, "seed": 1},
+        {"gamma": 1e-3, "t_star": 0.02, "seed": 2}, {"gamma": 1e-3, "t_star": 0.02, "seed": 1}]
+check(min(rows, key=st.reference_key) is rows[3], "the reference: the smallest gamma*, then t*, then seed")
 sys.exit(1 if failures() else 0)
