@@ -5,7 +5,9 @@ Left: h(phi) with its 95 % band and the per-bin estimates (the paper's Figure 1)
 at the smallest, a middle and the largest calibrated F, beside Radl 2014's at the same F (the fitted a multiplies
 F^n and Radl's a multiplies F: the a's are not comparable, H is); right: H(F, phi) = h/(1 + aF^n) against F (n = the file's width_exponent, 1 = the paper's) for a few phi, with bands at the data's widths.
 Radl & Sundaresan 2014 (the published piecewise cubics, data/reference/radl2014-filtered-drag.csv) is
-drawn beside the fit, dashed.
+drawn beside the fit, dashed. The left and middle panels run to --phi-to (default 0.6, a fluidized bed's emulsion):
+beyond the model's phi_max (its largest fitted bin) the model holds its end values (docs/schema-drag-model.md), drawn
+dotted over a grey band that says where the data end.
 
     /usr/bin/python3 tools/plot_model.py out/fit/model.h5 -o out/fit/model.png
 """
@@ -58,11 +60,21 @@ def radl2014():
     return curve("h"), curve("a")
 
 
+def beyond_grid(phi_end, phi_to, n=30):
+    """The phi where a plot to phi_to runs past the model's data (phi_end = phi_max): n points from phi_end to
+    phi_to, none when phi_to <= phi_end."""
+    return np.linspace(phi_end, phi_to, n) if phi_to > phi_end else np.array([])
+
+
 def main():
     p = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("model")
     p.add_argument("-o", "--output", default=None, help="image file (default: MODEL with .png)")
+    p.add_argument("--phi-to", type=float, default=0.6,
+                   help="right end of the phi axes (default 0.6; at least the model's phi_max): beyond phi_max the held ends")
     args = p.parse_args()
+    if not 0 < args.phi_to <= 0.65:
+        p.error(f"--phi-to {args.phi_to}: allowed 0 < phi <= 0.65 (random close packing 0.64)")
     out = args.output or os.path.splitext(args.model)[0] + ".png"
     with h5py.File(args.model, "r") as f:
         b = {k: f["bands"][k][()] for k in f["bands"]}
@@ -75,6 +87,19 @@ def main():
         n = float(f.attrs.get("width_exponent", 1.0))  # absent in files older than the attribute: 1
     rh, ra = radl2014()
     phi = b["phi"]
+    # beyond the data: the model holds h, a (and so H and the bands) at their values at phi_max
+    phi_end = float(phi[-1])
+    beyond = beyond_grid(phi_end, args.phi_to)
+    phi_all = np.concatenate([phi, beyond])
+
+    def held(v):
+        return np.full(len(beyond), v[-1])
+
+    def shade(axis):
+        if len(beyond):
+            axis.axvspan(phi_end, args.phi_to, color="grey", alpha=0.12, lw=0)
+            axis.text(0.5 * (phi_end + args.phi_to), 0.97, f"no data\n(> {phi_end:.3f}):\nends held", ha="center",
+                      va="top", fontsize=7, color="dimgrey", transform=axis.get_xaxis_transform())
     bound = bins["used"] == 1
     if "at_bound" in bins:
         bound &= bins["at_bound"] == 1
@@ -83,7 +108,10 @@ def main():
     used = (bins["used"] == 1) & ~bound  # bins at a bound: open symbols, no error bars
     fig, ax = plt.subplots(1, 3, figsize=(15, 4.5))
     ax[0].fill_between(phi, b["h_low"], b["h_high"], alpha=0.3, label="95 % band")
-    ax[0].plot(phi, b["h"], label="fit (P-spline)")
+    line, = ax[0].plot(phi, b["h"], label="fit (P-spline)")
+    if len(beyond):
+        ax[0].fill_between(beyond, held(b["h_low"]), held(b["h_high"]), color=line.get_color(), alpha=0.12)
+        ax[0].plot(beyond, held(b["h"]), ":", color=line.get_color())
     # per-bin errors: the bootstrap's (widths' correlation included) when the file has them
     se_h = bins.get("h_stderr_bootstrap", bins["h_stderr"])
     se_log_a = bins.get("log_a_stderr_bootstrap", bins["log_a_stderr"])
@@ -91,8 +119,9 @@ def main():
                    label="per-bin fit")
     if bound.any():
         ax[0].plot(bins["phi"][bound], bins["h"][bound], "o", mfc="none", ms=5, label="per-bin fit at a bound")
-    ax[0].plot(phi, rh(phi), "k--", label="Radl & Sundaresan 2014")
+    ax[0].plot(phi_all, rh(phi_all), "k--", label="Radl & Sundaresan 2014")
     ax[0].set_ylim(-0.2, 1.05)
+    shade(ax[0])
     ax[0].axvline(phi_crit, color="grey", lw=0.5)
     ax[0].set(xlabel=r"$\bar\phi_p$", ylabel="h", title="h: largest drag correction (F -> 0)")
     ax[0].legend(fontsize=8)
@@ -105,12 +134,17 @@ def main():
         row = int(np.argmin(abs(b["F"] - Fk)))
         line, = ax[1].plot(phi, b["h"] / (1 + b["a"] * Fk**n), label=f"fit, F = {Fk:.3g}")
         ax[1].fill_between(phi, b["H_low"][row], b["H_high"][row], color=line.get_color(), alpha=0.2)
-        ax[1].plot(phi, rh(phi) / (1 + ra(phi) * Fk), "--", color=line.get_color(), lw=1,
+        if len(beyond):
+            ax[1].plot(beyond, held(b["h"] / (1 + b["a"] * Fk**n)), ":", color=line.get_color())
+            ax[1].fill_between(beyond, held(b["H_low"][row]), held(b["H_high"][row]), color=line.get_color(),
+                               alpha=0.1)
+        ax[1].plot(phi_all, rh(phi_all) / (1 + ra(phi_all) * Fk), "--", color=line.get_color(), lw=1,
                    label=f"Radl 2014, F = {Fk:.3g}")
     ax[1].axhline(0, color="k", lw=0.5)
     ax[1].set(xlabel=r"$\bar\phi_p$", ylabel=r"H = h/(1 + a F$^n$)",
               title="H(F, φ) at the calibrated F: fit (band 95 %) vs Radl 2014 (dashed)")
     ax[1].set_ylim(-0.1, 1.05)
+    shade(ax[1])
     ax[1].legend(fontsize=7)
     F = np.geomspace(max(b["F"].min() / 3, 1e-3), b["F"].max() * 3, 100)
     for target in (0.05, 0.1, 0.2, 0.3, 0.4):
