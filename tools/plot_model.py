@@ -92,8 +92,11 @@ def main():
     beyond = beyond_grid(phi_end, args.phi_to)
     phi_all = np.concatenate([phi, beyond])
 
-    def held(v):
-        return np.full(len(beyond), v[-1])
+    def held(axis, v, low, high, color, alpha):
+        """The held ends past phi_max: v[-1] dotted over the band low[-1]..high[-1]."""
+        if len(beyond):
+            axis.fill_between(beyond, low[-1], high[-1], color=color, alpha=alpha)
+            axis.plot(beyond, np.full(len(beyond), v[-1]), ":", color=color)
 
     def shade(axis):
         if len(beyond):
@@ -109,9 +112,7 @@ def main():
     fig, ax = plt.subplots(1, 3, figsize=(15, 4.5))
     ax[0].fill_between(phi, b["h_low"], b["h_high"], alpha=0.3, label="95 % band")
     line, = ax[0].plot(phi, b["h"], label="fit (P-spline)")
-    if len(beyond):
-        ax[0].fill_between(beyond, held(b["h_low"]), held(b["h_high"]), color=line.get_color(), alpha=0.12)
-        ax[0].plot(beyond, held(b["h"]), ":", color=line.get_color())
+    held(ax[0], b["h"], b["h_low"], b["h_high"], line.get_color(), 0.12)
     # per-bin errors: the bootstrap's (widths' correlation included) when the file has them
     se_h = bins.get("h_stderr_bootstrap", bins["h_stderr"])
     se_log_a = bins.get("log_a_stderr_bootstrap", bins["log_a_stderr"])
@@ -132,12 +133,10 @@ def main():
     for k in picks:
         Fk = Fs[k]
         row = int(np.argmin(abs(b["F"] - Fk)))
-        line, = ax[1].plot(phi, b["h"] / (1 + b["a"] * Fk**n), label=f"fit, F = {Fk:.3g}")
+        H = b["h"] / (1 + b["a"] * Fk**n)
+        line, = ax[1].plot(phi, H, label=f"fit, F = {Fk:.3g}")
         ax[1].fill_between(phi, b["H_low"][row], b["H_high"][row], color=line.get_color(), alpha=0.2)
-        if len(beyond):
-            ax[1].plot(beyond, held(b["h"] / (1 + b["a"] * Fk**n)), ":", color=line.get_color())
-            ax[1].fill_between(beyond, held(b["H_low"][row]), held(b["H_high"][row]), color=line.get_color(),
-                               alpha=0.1)
+        held(ax[1], H, b["H_low"][row], b["H_high"][row], line.get_color(), 0.1)
         ax[1].plot(phi_all, rh(phi_all) / (1 + ra(phi_all) * Fk), "--", color=line.get_color(), lw=1,
                    label=f"Radl 2014, F = {Fk:.3g}")
     ax[1].axhline(0, color="k", lw=0.5)
