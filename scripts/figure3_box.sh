@@ -21,7 +21,8 @@
 #   modelraw the same model with c_corr off (fluid.parcel_correction = false), as the half-box model is used (its
 #            c_corr is 1): the fair comparison of the two boxes' models when this box has no parcel fit.
 # Each on the grid of CELLS cells across (default 4: the paper's Figure 3 grid, 26.5 d_p in its box), sampled
-# 40-80 t_ref (a coarse grid seeds its clustering from little noise, as the half profile's COARSE_SET), then the
+# 40-80 t_ref (a coarse grid seeds its clustering from little noise, as the half profile's COARSE_SET) with the
+# profile's COARSE_SET and PHI_SET_<phi> (the box, gamma* and t* of the resolved runs), then the
 # table of the slip error against each resolved run (tools/closure_wide_table.py) -> OUT/figure3_c<CELLS>/table.md.
 # A coarse run whose summary.h5 exists is not run again; a filtered file or table that exists is kept.
 # Environment: PROFILE (default paper), CELLS (default 4), BUILD (default build), NICE (default 0), NP (default 1:
@@ -48,6 +49,9 @@ base_scene=$(cd "$repo" && mk print-BASE_SCENE)
 box_dp=$(cd "$repo" && mk print-BOX_DP)
 from_tref=$(cd "$repo" && mk print-FROM_TREF)
 read -r -a filter_args <<< "$(cd "$repo" && mk print-FILTER_ARGS_LINE)"
+# the profile's coarse settings (COARSE_SET: the half profile's box and gamma*; empty for the paper's, whose base
+# scene is its box), as the pipeline gives them
+read -r -a coarse_set <<< "$(cd "$repo" && mk print-COARSE_SET)"
 dx=$(python3 -c "print($box_dp/$cells)")
 dir=$out/figure3_c$cells
 mkdir -p "$dir"
@@ -105,8 +109,14 @@ for phi in "${phis[@]}"; do
 done
 
 source "$repo/scripts/coarse_run.sh"
-coarse_sets=(--set run.end_time_tref=80 --set run.sampling_start_tref=40)
+coarse_sets=()
+for s in "${coarse_set[@]}"; do coarse_sets+=(--set "$s"); done
+coarse_sets+=(--set run.end_time_tref=80 --set run.sampling_start_tref=40)
 for phi in "${phis[@]}"; do
+  # the profile's settings of this solids fraction (PHI_SET_<phi>: the half box's dense runs' gamma* = 1e-3 and
+  # t* = 0.05), after the others as the pipeline gives them
+  phi_sets=()
+  for s in $(cd "$repo" && mk "print-PHI_SET_$phi"); do phi_sets+=(--set "$s"); done
   for alpha in "${alphas[@]}"; do
     for seed in "${seeds[@]}"; do
       for c in "${closures[@]}"; do
@@ -120,7 +130,7 @@ for phi in "${phis[@]}"; do
             args=(--model "$out/fit/model.h5")
             if [ "$c" = modelraw ]; then args+=(--set fluid.parcel_correction=false); fi ;;
         esac
-        coarse_run "$dir/phi${phi}_a${alpha}_${c}_s$seed" "$phi" "$alpha" "$seed" "${args[@]}"
+        coarse_run "$dir/phi${phi}_a${alpha}_${c}_s$seed" "$phi" "$alpha" "$seed" "${args[@]}" "${phi_sets[@]}"
       done
     done
   done

@@ -1,0 +1,86 @@
+#!/usr/bin/env bash
+# e2e: scripts/figure3_box.sh runs each coarse run with its profile's settings, as the pipeline does: the half
+# profile's COARSE_SET (its 53 x 213 x 53 d_p box and gamma* = 2e-3) and, after it, the solids fraction's
+# PHI_SET_<phi> (0.30: gamma* = 1e-3, t* = 0.05), on cells of BOX_DP/CELLS d_p, sampled 40-80 t_ref; the paper
+# profile's runs (its box in the base scene, no COARSE_SET) as before. Without these a half-box call ran the demo's
+# 30 d_p box. Stub binaries record each command line (nothing is simulated); the resolved runs are stood in for by
+# filtered files carrying only the params the script checks (the box width in d_p and <phi>).
+# Environment (set by CTest): CGD_SOURCE_DIR.
+source "$(dirname "$0")/lib/prologue.sh"
+mkdir -p "$tmp/bin"
+# cgd-coarse: --summarise writes its -o file; a coarse run records its arguments in RUN.args and fails (reported and
+# left out of the table by the script); cgd-fit --grid-table writes its -o file
+cat > "$tmp/bin/cgd-coarse" <<'EOF'
+#!/usr/bin/env bash
+out=; prev=
+for a in "$@"; do [ "$prev" = -o ] && out=$a; prev=$a; done
+[ "$1" = --summarise ] && { touch "$out"; exit 0; }
+echo "$*" > "$out.args"
+exit 1
+EOF
+cat > "$tmp/bin/cgd-fit" <<'EOF'
+#!/usr/bin/env bash
+out=; prev=
+for a in "$@"; do [ "$prev" = -o ] && out=$a; prev=$a; done
+touch "$out"
+EOF
+chmod +x "$tmp/bin/cgd-coarse" "$tmp/bin/cgd-fit"
+
+# a filtered file as the script reads it: params/box_size_m, diameter_m, solids_fraction
+fake_filtered() {  # PATH BOX_DP PHI
+  mkdir -p "$(dirname "$1")"
+  /usr/bin/python3 - "$@" <<'PY'
+import sys, h5py
+path, box_dp, phi = sys.argv[1], float(sys.argv[2]), float(sys.argv[3])
+with h5py.File(path, "w") as f:
+    p = f.create_group("params")
+    p.attrs["diameter_m"] = 7.5e-05
+    p.attrs["box_size_m"] = [box_dp * 7.5e-05, 4 * box_dp * 7.5e-05, box_dp * 7.5e-05]
+    p.attrs["solids_fraction"] = phi
+PY
+}
+args_of() { cat "$1.args" 2>/dev/null; }
+# the value of the last --set KEY=... on a command line (the one cgd-coarse takes)
+last_set() { grep -o -- "--set $2=[^ ]*" <<<"$1" | tail -n 1 | cut -d= -f2-; }
+
+# ---- the half profile: dilute 0.05 and dense 0.30 ----
+out=$tmp/half
+fake_filtered "$out/figure3_c4/filtered_phi0.05.h5" 53 0.05
+fake_filtered "$out/figure3_c4/filtered_phi0.30.h5" 53 0.30
+PROFILE=half BUILD=$tmp/bin bash scripts/figure3_box.sh "$out" 0.05,0.30 3 1 micro,perfect > "$tmp/half.log" 2>&1
+dilute=$(args_of "$out/figure3_c4/phi0.05_a3_micro_s1")
+dense=$(args_of "$out/figure3_c4/phi0.30_a3_perfect_s1")
+[ -n "$dilute" ] && [ -n "$dense" ] || { fail "half: no coarse command recorded"; cat "$tmp/half.log"; }
+before=$failures
+for c in "$dilute" "$dense"; do
+  [ "$(last_set "$c" domain.size_dp)" = "[53,213,53]" ] || fail "half: the coarse run is not in the half box: $c"
+  [ "$(last_set "$c" fluid.dx_over_dp)" = 13.25 ] || fail "half: cells of $(last_set "$c" fluid.dx_over_dp) d_p, not 53/4"
+  [ "$(last_set "$c" run.end_time_tref)" = 80 ] && [ "$(last_set "$c" run.sampling_start_tref)" = 40 ] ||
+    fail "half: not sampled 40-80 t_ref: $c"
+done
+[ $failures -eq $before ] && ok "half: the coarse runs in the 53 x 213 x 53 d_p box on 13.25 d_p cells, sampled 40-80 t_ref (COARSE_SET)"
+[ "$(last_set "$dilute" contact.gamma_star)" = 2e-3 ] && [ -z "$(last_set "$dilute" contact.t_star)" ] &&
+  ok "half: 0.05 at the dilute runs' gamma* = 2e-3 and the scene's t*" || fail "half: 0.05's contact settings: $dilute"
+[ "$(last_set "$dense" contact.gamma_star)" = 1e-3 ] && [ "$(last_set "$dense" contact.t_star)" = 0.05 ] &&
+  ok "half: 0.30 at its PHI_SET (gamma* = 1e-3, t* = 0.05), after COARSE_SET" || fail "half: 0.30's contact settings: $dense"
+grep -q -- "--set particles.solids_fraction=0.30 " <<<"$dense" && grep -q -- "--model $out/figure3_c4/perfect_phi0.30.h5" <<<"$dense" &&
+  ok "half: the perfect run at 0.30 with its own grid table" || fail "half: the perfect run's model: $dense"
+
+# ---- the paper profile: its box is its base scene's; no COARSE_SET or PHI_SET ----
+out=$tmp/paper
+fake_filtered "$out/figure3_c4/filtered_phi0.05.h5" 106 0.05
+PROFILE=paper BUILD=$tmp/bin bash scripts/figure3_box.sh "$out" 0.05 6 2 radl > "$tmp/paper.log" 2>&1
+paper=$(args_of "$out/figure3_c4/phi0.05_a6_radl_s2")
+[ -n "$paper" ] && [ -z "$(last_set "$paper" domain.size_dp)" ] && [ -z "$(last_set "$paper" contact.gamma_star)" ] &&
+  [ "$(last_set "$paper" fluid.dx_over_dp)" = 26.5 ] && [ "$(last_set "$paper" run.sampling_start_tref)" = 40 ] &&
+  [ "$(last_set "$paper" fluid.drag)" = radl2014 ] && grep -q "data/scenes/table1_phi005.toml" <<<"$paper" &&
+  ok "paper: the base scene's box, 26.5 d_p cells, 40-80 t_ref, radl2014" || { fail "paper: $paper"; cat "$tmp/paper.log"; }
+
+# ---- a copied filtered file of another box is refused (exit 2) ----
+out=$tmp/wrongbox
+fake_filtered "$out/figure3_c4/filtered_phi0.05.h5" 106 0.05
+PROFILE=half BUILD=$tmp/bin bash scripts/figure3_box.sh "$out" 0.05 3 1 micro > "$tmp/wrong.log" 2>&1
+status=$?
+[ $status -eq 2 ] && grep -q "106 d_p box" "$tmp/wrong.log" && [ ! -e "$out/figure3_c4/phi0.05_a3_micro_s1.args" ] &&
+  ok "a paper-box filtered file in a half-box call: exit 2, nothing run" || fail "wrong box: exit $status, $(cat "$tmp/wrong.log")"
+exit $((failures > 0))
