@@ -41,7 +41,6 @@ from_tref=20
 mk() { make -s -f "$repo/Makefile.pipeline" PROFILE=half "$@"; }
 base_scene=$(cd "$repo" && mk print-BASE_SCENE)
 box_dp=$(cd "$repo" && mk print-BOX_DP)
-read -r -a coarse_set <<< "$(cd "$repo" && mk print-COARSE_SET)"
 dx=$(python3 -c "print($box_dp/$cells)")
 dir=$out/closure_drift
 own_deposit=${OWN_DEPOSIT:-true}
@@ -100,13 +99,11 @@ done
 
 source "$repo/scripts/coarse_run.sh"
 launcher=()
-coarse_sets=()
-for s in "${coarse_set[@]}"; do coarse_sets+=(--set "$s"); done
+profile_coarse_sets
 for phi in "${phis[@]}"; do
   # the profile's settings of this solids fraction (PHI_SET_<phi>, e.g. the dense runs' gamma* = 1e-3), after the
   # others as the pipeline gives them
-  phi_sets=()
-  for s in $(cd "$repo" && mk "print-PHI_SET_$phi"); do phi_sets+=(--set "$s"); done
+  profile_phi_sets "$phi"
   for alpha in "${alphas[@]}"; do
     for seed in "${seeds[@]}"; do
       for c in "${closures[@]}"; do

@@ -39,7 +39,6 @@ from_tref=20
 mk() { make -s -f "$repo/Makefile.pipeline" PROFILE=half "$@"; }
 base_scene=$(cd "$repo" && mk print-BASE_SCENE)
 box_dp=$(cd "$repo" && mk print-BOX_DP)
-read -r -a coarse_set <<< "$(cd "$repo" && mk print-COARSE_SET)"
 dx=$(python3 -c "print($box_dp/$cells)")
 IFS=, read -r -a heldout <<< "${HELDOUT:-}"
 dir=$out/closure_wide
@@ -91,8 +90,7 @@ done
 say() { echo "[closure_wide] $*" >&2; }
 source "$repo/scripts/coarse_run.sh"
 launcher=()
-coarse_sets=()
-for s in "${coarse_set[@]}"; do coarse_sets+=(--set "$s"); done
+profile_coarse_sets
 for phi in "${phis[@]}"; do
   for alpha in "${alphas[@]}"; do
     for seed in "${seeds[@]}"; do

@@ -15,3 +15,22 @@ coarse_run() {
     --set particles.parcel_size="$alpha" "$@" -o "$run" > "$run.log" 2>&1 ||
     { say "$(basename "$run") failed (log $run.log)"; return 0; }
 }
+
+# The profile's settings as the pipeline gives them to its coarse runs, as --set options (through the caller's mk(),
+# make of Makefile.pipeline with its PROFILE):
+# profile_coarse_sets: COARSE_SET (the half profile's box and gamma*; empty for the paper's, whose base scene is its
+# box) -> the array coarse_sets.
+profile_coarse_sets() {
+  local s set
+  read -r -a set <<< "$(cd "$repo" && mk print-COARSE_SET)"
+  coarse_sets=()
+  for s in "${set[@]}"; do coarse_sets+=(--set "$s"); done
+}
+# profile_phi_sets PHI: PHI_SET_<PHI> (e.g. the half box's dense runs' gamma* = 1e-3 and t* = 0.05; PHI spelled as the
+# run directories, two decimals) -> the array phi_sets, to be given after the others as the pipeline does.
+profile_phi_sets() {
+  local s set
+  read -r -a set <<< "$(cd "$repo" && mk "print-PHI_SET_$1")"
+  phi_sets=()
+  for s in "${set[@]}"; do phi_sets+=(--set "$s"); done
+}

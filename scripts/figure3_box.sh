@@ -49,9 +49,6 @@ base_scene=$(cd "$repo" && mk print-BASE_SCENE)
 box_dp=$(cd "$repo" && mk print-BOX_DP)
 from_tref=$(cd "$repo" && mk print-FROM_TREF)
 read -r -a filter_args <<< "$(cd "$repo" && mk print-FILTER_ARGS_LINE)"
-# the profile's coarse settings (COARSE_SET: the half profile's box and gamma*; empty for the paper's, whose base
-# scene is its box), as the pipeline gives them
-read -r -a coarse_set <<< "$(cd "$repo" && mk print-COARSE_SET)"
 dx=$(python3 -c "print($box_dp/$cells)")
 dir=$out/figure3_c$cells
 mkdir -p "$dir"
@@ -109,14 +106,12 @@ for phi in "${phis[@]}"; do
 done
 
 source "$repo/scripts/coarse_run.sh"
-coarse_sets=()
-for s in "${coarse_set[@]}"; do coarse_sets+=(--set "$s"); done
+profile_coarse_sets
 coarse_sets+=(--set run.end_time_tref=80 --set run.sampling_start_tref=40)
 for phi in "${phis[@]}"; do
   # the profile's settings of this solids fraction (PHI_SET_<phi>: the half box's dense runs' gamma* = 1e-3 and
   # t* = 0.05), after the others as the pipeline gives them
-  phi_sets=()
-  for s in $(cd "$repo" && mk "print-PHI_SET_$phi"); do phi_sets+=(--set "$s"); done
+  profile_phi_sets "$phi"
   for alpha in "${alphas[@]}"; do
     for seed in "${seeds[@]}"; do
       for c in "${closures[@]}"; do
