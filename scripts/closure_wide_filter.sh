@@ -13,7 +13,8 @@
 #      a grid 4/3 and 2 times coarser, i.e. Delta = r x the cell with r = 4/G)
 #   3. coarse runs phi<phi>_a<alpha>_g<G>_s<seed> (the table of grid G, c_corr off, as the pipeline's perfect runs)
 #      and phi<phi>_a<alpha>_r<r>_s<seed> (the fitted model at fluid.filter_to_grid_ratio = r), each with the
-#      pipeline's coarse settings (COARSE_SET of the half profile: sampled 40-80 t_ref)
+#      pipeline's coarse settings (COARSE_SET of the half profile: sampled 40-80 t_ref; then PHI_SET_<phi>, the dense
+#      runs' gamma* = 1e-3 and t*)
 #   4. the table (tools/closure_wide_table.py): slip error against the resolved run (its 20-50 t_ref slip) per
 #      configuration, mean over the seeds +- their standard error -> OUT/closure_wide/table.md
 # A configuration whose summary.h5 exists is not run again (delete its directory to rerun it).
@@ -92,17 +93,18 @@ source "$repo/scripts/coarse_run.sh"
 launcher=()
 profile_coarse_sets
 for phi in "${phis[@]}"; do
+  profile_phi_sets "$phi"
   for alpha in "${alphas[@]}"; do
     for seed in "${seeds[@]}"; do
       for g in "${grids[@]}"; do
         coarse_run "$dir/phi${phi}_a${alpha}_g${g}_s$seed" "$phi" "$alpha" "$seed" --model "$dir/perfect_g$g.h5" \
-          --set fluid.parcel_correction=false
+          --set fluid.parcel_correction=false "${phi_sets[@]}"
       done
       model=$(model_for "$phi")
       if [ -f "$model" ]; then
         for r in "${ratios[@]}"; do
           coarse_run "$dir/phi${phi}_a${alpha}_r${r}_s$seed" "$phi" "$alpha" "$seed" --model "$model" \
-            --set fluid.parcel_correction=false --set fluid.filter_to_grid_ratio="$r"
+            --set fluid.parcel_correction=false --set fluid.filter_to_grid_ratio="$r" "${phi_sets[@]}"
         done
       fi
     done

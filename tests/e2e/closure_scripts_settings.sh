@@ -1,30 +1,28 @@
 #!/usr/bin/env bash
-# e2e: scripts/figure3_box.sh runs each coarse run with its profile's settings, as the pipeline does: the half
-# profile's COARSE_SET (its 53 x 213 x 53 d_p box and gamma* = 2e-3) and, after it, the solids fraction's
-# PHI_SET_<phi> (0.30: gamma* = 1e-3, t* = 0.05), on cells of BOX_DP/CELLS d_p, sampled 40-80 t_ref; the paper
-# profile's runs (its box in the base scene, no COARSE_SET) as before. Without these a half-box call ran the demo's
-# 30 d_p box. Stub binaries record each command line (nothing is simulated); the resolved runs are stood in for by
-# filtered files carrying only the params the script checks (the box width in d_p and <phi>).
+# e2e: the closure experiments' scripts run each coarse run with its profile's settings, as the pipeline does
+# (scripts/coarse_run.sh: profile_coarse_sets, profile_phi_sets): the half profile's COARSE_SET (its 53 x 213 x 53 d_p
+# box and gamma* = 2e-3) and, after it, the solids fraction's PHI_SET_<phi> (0.30: gamma* = 1e-3, t* = 0.05), on cells
+# of BOX_DP/CELLS d_p; the paper profile's runs (its box in the base scene, no COARSE_SET) as before.
+# scripts/figure3_box.sh ran a half-box call in the demo's 30 d_p box without them, and closure_wide_filter.sh ran a
+# dense <phi> at the dilute runs' gamma*. Stub binaries record each command line (nothing is simulated); the resolved
+# runs are stood in for by filtered files carrying only the params figure3_box.sh checks (the box width in d_p and
+# <phi>), or by empty run directories with DONE.
 # Environment (set by CTest): CGD_SOURCE_DIR.
 source "$(dirname "$0")/lib/prologue.sh"
 mkdir -p "$tmp/bin"
+# stub NAME BODY: a stub binary $tmp/bin/NAME running BODY with $out its -o argument
+stub() {
+  printf '#!/usr/bin/env bash\nout=; prev=\nfor a in "$@"; do [ "$prev" = -o ] && out=$a; prev=$a; done\n%s\n' "$2" \
+    > "$tmp/bin/$1"
+  chmod +x "$tmp/bin/$1"
+}
 # cgd-coarse: --summarise writes its -o file; a coarse run records its arguments in RUN.args and fails (reported and
-# left out of the table by the script); cgd-fit --grid-table writes its -o file
-cat > "$tmp/bin/cgd-coarse" <<'EOF'
-#!/usr/bin/env bash
-out=; prev=
-for a in "$@"; do [ "$prev" = -o ] && out=$a; prev=$a; done
-[ "$1" = --summarise ] && { touch "$out"; exit 0; }
+# left out of the table by the scripts); cgd-fit and cgd-filter write their -o file
+stub cgd-coarse '[ "$1" = --summarise ] && { touch "$out"; exit 0; }
 echo "$*" > "$out.args"
-exit 1
-EOF
-cat > "$tmp/bin/cgd-fit" <<'EOF'
-#!/usr/bin/env bash
-out=; prev=
-for a in "$@"; do [ "$prev" = -o ] && out=$a; prev=$a; done
-touch "$out"
-EOF
-chmod +x "$tmp/bin/cgd-coarse" "$tmp/bin/cgd-fit"
+exit 1'
+stub cgd-fit 'touch "$out"'
+stub cgd-filter 'touch "$out"'
 
 # a filtered file as the script reads it: params/box_size_m, diameter_m, solids_fraction
 fake_filtered() {  # PATH BOX_DP PHI
@@ -83,4 +81,17 @@ PROFILE=half BUILD=$tmp/bin bash scripts/figure3_box.sh "$out" 0.05 3 1 micro > 
 status=$?
 [ $status -eq 2 ] && grep -q "106 d_p box" "$tmp/wrong.log" && [ ! -e "$out/figure3_c4/phi0.05_a3_micro_s1.args" ] &&
   ok "a paper-box filtered file in a half-box call: exit 2, nothing run" || fail "wrong box: exit $status, $(cat "$tmp/wrong.log")"
+# ---- closure_wide_filter.sh and closure_drift.sh at a dense <phi>: PHI_SET_0.30 after COARSE_SET ----
+out=$tmp/wide
+mkdir -p "$out/generate/phi0.05" "$out/generate/phi0.30"
+touch "$out/generate/phi0.05/DONE" "$out/generate/phi0.30/DONE"
+BUILD=$tmp/bin bash scripts/closure_wide_filter.sh "$out" 0.30 3 1 4 > "$tmp/wide.log" 2>&1
+BUILD=$tmp/bin bash scripts/closure_drift.sh "$out" 0.30 3 1 radl > "$tmp/drift.log" 2>&1
+for run in closure_wide/phi0.30_a3_g4_s1 closure_drift/phi0.30_a3_radl_s1; do
+  c=$(args_of "$out/$run")
+  [ "$(last_set "$c" domain.size_dp)" = "[53,213,53]" ] && [ "$(last_set "$c" fluid.dx_over_dp)" = 13.25 ] &&
+    [ "$(last_set "$c" contact.gamma_star)" = 1e-3 ] && [ "$(last_set "$c" contact.t_star)" = 0.05 ] &&
+    ok "$run: the half box on 13.25 d_p cells at 0.30's PHI_SET (gamma* = 1e-3, t* = 0.05)" ||
+    { fail "$run: ${c:-no coarse command recorded}"; cat "$tmp/wide.log" "$tmp/drift.log"; }
+done
 exit $((failures > 0))
