@@ -22,7 +22,7 @@ Two more checks of "one home per format, one spelling per idea" (issue 30):
 - the retired spellings of version-1 files (base_drag, "tsc-grid", "tsc-deposit-interpolate") appear, outside
   comments, only in their format's upgrade path: core/schema/drag_model.cpp, core/schema/filtered.cpp and
   tools/cgd_schema.py; no other tool or stage reads or writes them; and the Python upgrade path spells what the
-  C++ one does and reads the shipped version-1 model data/models/half_box.h5 alike.
+  C++ one does and reads a version-1 model (tests/data/half_box_v1.h5) alike.
 Run by CTest (schema_tool_names).
 """
 import ast
@@ -153,9 +153,9 @@ def names_outside_schema():
 
 def upgrade_paths_agree():
     """Problems: the Python upgrade path (tools/cgd_schema.py) spells what the C++ one does -- today's micro-law
-    attribute and grid operator, version 1's spellings per format -- and reads the shipped version-1 model
-    data/models/half_box.h5 as the C++ reader does (micro law beetstra, operator grid: DragModelSchema.
-    TheShippedModelStillReads)."""
+    attribute and grid operator, version 1's spellings per format -- and reads a version-1 model,
+    tests/data/half_box_v1.h5 (the three-run half-box model, version 1), as the C++ reader does (micro law
+    beetstra, operator grid: DragModelSchema.AVersion1ModelStillReads)."""
     sys.path.insert(0, os.path.join(ROOT, "tools"))
     import cgd_schema
     problems = []
@@ -178,10 +178,10 @@ def upgrade_paths_agree():
             cgd_schema.GRID != "grid":
         problems.append("core/schema/calibration.cpp and tools/cgd_schema.py disagree on the grid operator's spelling")
     import h5py
-    with h5py.File(os.path.join(ROOT, "data", "models", "half_box.h5"), "r") as f:
+    with h5py.File(os.path.join(ROOT, "tests", "data", "half_box_v1.h5"), "r") as f:
         got = (int(f.attrs["cgd_format_version"]), cgd_schema.micro_law(f.attrs), cgd_schema.calibration_operator(f.attrs))
     if got != (1, "beetstra", "grid"):
-        problems.append(f"data/models/half_box.h5 through tools/cgd_schema.py: (version, micro law, operator) = {got}, "
+        problems.append(f"tests/data/half_box_v1.h5 through tools/cgd_schema.py: (version, micro law, operator) = {got}, "
                         "expected (1, 'beetstra', 'grid') as core/schema/drag_model.cpp reads it")
     return problems
 
