@@ -20,7 +20,7 @@ And per file, as the reference a coarse run is checked against (`cgd-coarse --su
 the file's whole box agrees with the slip the run's own series gave over the same window (SERIES_SLIP, measured when
 each run ended, docs/half_box_runs.md and docs/coarse.md) within 0.005 u_t: the two are the same average at the
 snapshots (e2e_coarse), sampled once per snapshot here against once per fluid step there (measured apart: at most
-0.002 u_t), while their batch errors are 0.014-0.029 u_t.
+0.002 u_t), while their batch errors are 0.014-0.054 u_t.
 
 Environment (set by CTest): CGD_SOURCE_DIR, CGD_BINARY_DIR.
 """
@@ -41,6 +41,7 @@ MIN_COUNT = 100  # cgd-fit's default --min-count, which --grid-table applies
 # the resolved runs' slip/u_t over 20-50 t_ref from their series.h5 (cgd-coarse --summarise RUN_DIR --from-tref 20),
 # measured when each run ended; a file shipped later adds its run's value here
 SERIES_SLIP = {"half_phi0.02.h5": 1.116, "half_phi0.05.h5": 1.116, "half_phi0.10.h5": 1.099, "half_phi0.20.h5": 0.894,
+               "half_phi0.30.h5": 0.737,
                "paper_phi0.02.h5": 1.357, "paper_phi0.05.h5": 1.515}
 SLIP_TOLERANCE = 0.005
 
