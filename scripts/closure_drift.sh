@@ -101,8 +101,6 @@ source "$repo/scripts/coarse_run.sh"
 launcher=()
 profile_coarse_sets
 for phi in "${phis[@]}"; do
-  # the profile's settings of this solids fraction (PHI_SET_<phi>, e.g. the dense runs' gamma* = 1e-3), after the
-  # others as the pipeline gives them
   profile_phi_sets "$phi"
   for alpha in "${alphas[@]}"; do
     for seed in "${seeds[@]}"; do

@@ -38,6 +38,7 @@ nice_level=${NICE:-0}
 cells=4
 from_tref=20
 mk() { make -s -f "$repo/Makefile.pipeline" PROFILE=half "$@"; }
+source "$repo/scripts/coarse_run.sh"
 base_scene=$(cd "$repo" && mk print-BASE_SCENE)
 box_dp=$(cd "$repo" && mk print-BOX_DP)
 dx=$(python3 -c "print($box_dp/$cells)")
@@ -65,8 +66,8 @@ model_for() {  # phi -> the model file its runs use
   if [ ${#heldout[@]} -eq 0 ]; then echo "$out/fit/model.h5"; else echo "$dir/without_phi$1/model.h5"; fi
 }
 if [ ${#heldout[@]} -gt 0 ]; then
-  read -r -a filter_args <<< "$(cd "$repo" && mk print-FILTER_ARGS_LINE)"
-  read -r -a fit_args <<< "$(cd "$repo" && mk print-FIT_ARGS)"
+  profile_words FILTER_ARGS_LINE filter_args
+  profile_words FIT_ARGS fit_args
   for phi in "${phis[@]}"; do
     others=()
     for h in "${heldout[@]}"; do
@@ -89,7 +90,6 @@ for phi in "${phis[@]}"; do
 done
 
 say() { echo "[closure_wide] $*" >&2; }
-source "$repo/scripts/coarse_run.sh"
 launcher=()
 profile_coarse_sets
 for phi in "${phis[@]}"; do

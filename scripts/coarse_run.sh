@@ -1,4 +1,5 @@
-# Sourced by the closure experiments' scripts (closure_drift.sh, closure_wide_filter.sh, figure3_box.sh): one coarse run of their matrix.
+# Sourced by the closure experiments' scripts (closure_drift.sh, closure_wide_filter.sh, figure3_box.sh): one coarse
+# run of their matrix, and the profile's settings they share with the pipeline.
 # coarse_run RUN PHI ALPHA SEED [cgd-coarse options...]: cgd-coarse of $repo/$base_scene with the caller's array
 # $coarse_sets (its --set options, given first), then that solids fraction, seed and parcel size on cells of $dx d_p,
 # then the options; niceness $nice_level, through the launcher array $launcher (empty: one rank) -> RUN (log RUN.log).
@@ -16,21 +17,28 @@ coarse_run() {
     { say "$(basename "$run") failed (log $run.log)"; return 0; }
 }
 
-# The profile's settings as the pipeline gives them to its coarse runs, as --set options (through the caller's mk(),
-# make of Makefile.pipeline with its PROFILE):
-# profile_coarse_sets: COARSE_SET (the half profile's box and gamma*; empty for the paper's, whose base scene is its
-# box) -> the array coarse_sets.
-profile_coarse_sets() {
-  local s set
-  read -r -a set <<< "$(cd "$repo" && mk print-COARSE_SET)"
-  coarse_sets=()
-  for s in "${set[@]}"; do coarse_sets+=(--set "$s"); done
+# The profile's settings as the pipeline gives them, through the caller's mk() (make of Makefile.pipeline with its
+# PROFILE). A make that fails returns 1 (the callers' set -e stops there) rather than giving no settings.
+# profile_words NAME ARRAY: the make variable NAME split into words -> the array ARRAY (e.g. FILTER_ARGS_LINE:
+# cgd-filter's options; FIT_ARGS: cgd-fit's).
+profile_words() {
+  local line
+  line=$(cd "$repo" && mk "print-$1") || return 1
+  read -r -a "$2" <<< "$line"
 }
-# profile_phi_sets PHI: PHI_SET_<PHI> (e.g. the half box's dense runs' gamma* = 1e-3 and t* = 0.05; PHI spelled as the
-# run directories, two decimals) -> the array phi_sets, to be given after the others as the pipeline does.
+# profile_coarse_sets: COARSE_SET as --set options (the half profile's box, gamma* and the coarse runs' 40-80 t_ref
+# window; empty for the paper's, whose base scene is its box) -> the array coarse_sets.
+profile_coarse_sets() {
+  local s words
+  profile_words COARSE_SET words || return 1
+  coarse_sets=()
+  for s in "${words[@]}"; do coarse_sets+=(--set "$s"); done
+}
+# profile_phi_sets PHI: PHI_SET_<PHI> as --set options (e.g. the half box's dense runs' gamma* = 1e-3 and t* = 0.05;
+# PHI spelled as the run directories, two decimals) -> the array phi_sets, given after the others as the pipeline does.
 profile_phi_sets() {
-  local s set
-  read -r -a set <<< "$(cd "$repo" && mk "print-PHI_SET_$1")"
+  local s words
+  profile_words "PHI_SET_$1" words || return 1
   phi_sets=()
-  for s in "${set[@]}"; do phi_sets+=(--set "$s"); done
+  for s in "${words[@]}"; do phi_sets+=(--set "$s"); done
 }

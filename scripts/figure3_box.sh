@@ -48,7 +48,8 @@ mk() { make -s -f "$repo/Makefile.pipeline" PROFILE="$profile" "$@"; }
 base_scene=$(cd "$repo" && mk print-BASE_SCENE)
 box_dp=$(cd "$repo" && mk print-BOX_DP)
 from_tref=$(cd "$repo" && mk print-FROM_TREF)
-read -r -a filter_args <<< "$(cd "$repo" && mk print-FILTER_ARGS_LINE)"
+source "$repo/scripts/coarse_run.sh"
+profile_words FILTER_ARGS_LINE filter_args
 dx=$(python3 -c "print($box_dp/$cells)")
 dir=$out/figure3_c$cells
 mkdir -p "$dir"
@@ -105,12 +106,9 @@ for phi in "${phis[@]}"; do
     { cat "${table%.h5}.report.txt" >&2; exit 1; }
 done
 
-source "$repo/scripts/coarse_run.sh"
 profile_coarse_sets
 coarse_sets+=(--set run.end_time_tref=80 --set run.sampling_start_tref=40)
 for phi in "${phis[@]}"; do
-  # the profile's settings of this solids fraction (PHI_SET_<phi>: the half box's dense runs' gamma* = 1e-3 and
-  # t* = 0.05), after the others as the pipeline gives them
   profile_phi_sets "$phi"
   for alpha in "${alphas[@]}"; do
     for seed in "${seeds[@]}"; do

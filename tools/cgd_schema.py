@@ -3,8 +3,8 @@ version-1 files: docs/schema-drag-model.md "Versions" and docs/schema-filtered.m
 
 Version 2 of the drag model and filtered files spells each idea once, as core/schema/ does: the microscopic law
 under the root attribute `micro_drag`, the calibration operator "box" or "grid". Version 1 (the files written
-before, among them the half-box model of tests/data/half_box_v1.h5) stored the model's law under `base_drag` and spelled the grid
-operator "tsc-grid" (model files) or "tsc-deposit-interpolate" (the filtered file's grids). A tool reads these
+before, among them the half-box model of tests/data/half_box_v1.h5) stored the model's law under `base_drag` and
+spelled the grid operator "tsc-grid" (model files) or "tsc-deposit-interpolate" (the filtered file's grids). A tool reads these
 two ideas through micro_law() and calibration_operator(), never by the old names, so that this module and
 core/schema/drag_model.cpp / core/schema/filtered.cpp (upgrade_version1) are the only places that know them.
 """

@@ -29,7 +29,8 @@ from plot_filtered import radl2014  # noqa: E402
 
 
 def fail(msg):
-    print(f"compare_boxes.py: {msg}", file=sys.stderr)
+    """Exit 2 with MSG, named by the tool that runs (tools/runs_H.py reads its files through read_grids)."""
+    print(f"{os.path.basename(sys.argv[0])}: {msg}", file=sys.stderr)
     sys.exit(2)
 
 

@@ -40,6 +40,8 @@ PY
 args_of() { cat "$1.args" 2>/dev/null; }
 # the value of the last --set KEY=... on a command line (the one cgd-coarse takes)
 last_set() { grep -o -- "--set $2=[^ ]*" <<<"$1" | tail -n 1 | cut -d= -f2-; }
+# a command line at the half profile's PHI_SET_0.30 (gamma* = 1e-3, t* = 0.05), given after COARSE_SET's gamma*
+at_dense_settings() { [ "$(last_set "$1" contact.gamma_star)" = 1e-3 ] && [ "$(last_set "$1" contact.t_star)" = 0.05 ]; }
 
 # ---- the half profile: dilute 0.05 and dense 0.30 ----
 out=$tmp/half
@@ -59,7 +61,7 @@ done
 [ $failures -eq $before ] && ok "half: the coarse runs in the 53 x 213 x 53 d_p box on 13.25 d_p cells, sampled 40-80 t_ref (COARSE_SET)"
 [ "$(last_set "$dilute" contact.gamma_star)" = 2e-3 ] && [ -z "$(last_set "$dilute" contact.t_star)" ] &&
   ok "half: 0.05 at the dilute runs' gamma* = 2e-3 and the scene's t*" || fail "half: 0.05's contact settings: $dilute"
-[ "$(last_set "$dense" contact.gamma_star)" = 1e-3 ] && [ "$(last_set "$dense" contact.t_star)" = 0.05 ] &&
+at_dense_settings "$dense" &&
   ok "half: 0.30 at its PHI_SET (gamma* = 1e-3, t* = 0.05), after COARSE_SET" || fail "half: 0.30's contact settings: $dense"
 grep -q -- "--set particles.solids_fraction=0.30 " <<<"$dense" && grep -q -- "--model $out/figure3_c4/perfect_phi0.30.h5" <<<"$dense" &&
   ok "half: the perfect run at 0.30 with its own grid table" || fail "half: the perfect run's model: $dense"
@@ -81,16 +83,19 @@ PROFILE=half BUILD=$tmp/bin bash scripts/figure3_box.sh "$out" 0.05 3 1 micro > 
 status=$?
 [ $status -eq 2 ] && grep -q "106 d_p box" "$tmp/wrong.log" && [ ! -e "$out/figure3_c4/phi0.05_a3_micro_s1.args" ] &&
   ok "a paper-box filtered file in a half-box call: exit 2, nothing run" || fail "wrong box: exit $status, $(cat "$tmp/wrong.log")"
+
 # ---- closure_wide_filter.sh and closure_drift.sh at a dense <phi>: PHI_SET_0.30 after COARSE_SET ----
 out=$tmp/wide
 mkdir -p "$out/generate/phi0.05" "$out/generate/phi0.30"
-touch "$out/generate/phi0.05/DONE" "$out/generate/phi0.30/DONE"
-BUILD=$tmp/bin bash scripts/closure_wide_filter.sh "$out" 0.30 3 1 4 > "$tmp/wide.log" 2>&1
+mkdir -p "$out/fit"
+touch "$out/generate/phi0.05/DONE" "$out/generate/phi0.30/DONE" "$out/fit/model.h5"
+BUILD=$tmp/bin bash scripts/closure_wide_filter.sh "$out" 0.30 3 1 4 1 > "$tmp/wide.log" 2>&1
 BUILD=$tmp/bin bash scripts/closure_drift.sh "$out" 0.30 3 1 radl > "$tmp/drift.log" 2>&1
-for run in closure_wide/phi0.30_a3_g4_s1 closure_drift/phi0.30_a3_radl_s1; do
+# the perfect table's and the model's runs of closure_wide_filter.sh, the published law's of closure_drift.sh
+for run in closure_wide/phi0.30_a3_g4_s1 closure_wide/phi0.30_a3_r1_s1 closure_drift/phi0.30_a3_radl_s1; do
   c=$(args_of "$out/$run")
   [ "$(last_set "$c" domain.size_dp)" = "[53,213,53]" ] && [ "$(last_set "$c" fluid.dx_over_dp)" = 13.25 ] &&
-    [ "$(last_set "$c" contact.gamma_star)" = 1e-3 ] && [ "$(last_set "$c" contact.t_star)" = 0.05 ] &&
+    at_dense_settings "$c" &&
     ok "$run: the half box on 13.25 d_p cells at 0.30's PHI_SET (gamma* = 1e-3, t* = 0.05)" ||
     { fail "$run: ${c:-no coarse command recorded}"; cat "$tmp/wide.log" "$tmp/drift.log"; }
 done

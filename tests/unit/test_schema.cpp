@@ -17,6 +17,7 @@
 #include <string>
 #include <vector>
 
+#include "core/checksum.hpp"
 #include "core/error.hpp"
 #include "core/h5.hpp"
 #include "core/scene.hpp"
@@ -711,6 +712,7 @@ TEST(DragModelSchema, CCorrCopyReplacesOnlyTheCorrection) {
 TEST(DragModelSchema, AVersion1ModelStillReads) {
   const char* s = std::getenv("CGD_SOURCE_DIR");
   const std::string path = std::string(s ? s : CGD_SOURCE_DIR_DEFAULT) + "/tests/data/half_box_v1.h5";
+  EXPECT_EQ(cgd::file_checksum_fnv1a(path), "d111d2866014b600");  // the bytes data/models/half_box.h5 shipped
   const DragModelFile m = cgd::schema::read_drag_model(path);
   EXPECT_EQ(m.version, 1);
   EXPECT_EQ(m.calibration_operator, cgd::CalibrationOperator::Grid);
