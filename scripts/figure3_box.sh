@@ -19,14 +19,22 @@
 #   model    OUT/fit/model.h5 when it exists (the model fitted in this box, with the c_corr(alpha) in its file: the
 #            parcel fit's, or the paper's k = 0.05 when none was made);
 #   modelraw the same model with c_corr off (fluid.parcel_correction = false), as the half-box model is used (its
-#            c_corr is 1): the fair comparison of the two boxes' models when this box has no parcel fit.
+#            c_corr is 1): the fair comparison of the two boxes' models when this box has no parcel fit;
+#   heldout  the phi-bar table of the grid of TABLE_CELLS across fitted on the OTHER runs' filtered files in
+#            OUT/figure3_c<CELLS> (cgd-fit --grid-table of every filtered_phi*.h5 there but the run's own), c_corr off:
+#            the perfect closure's held-out twin, a closure the run has not seen;
+#   radl, halfbox, model, modelraw followed by r<R> (e.g. radlr2, modelrawr2): the law's correction at
+#            Delta = R cells (fluid.filter_to_grid_ratio = R; docs/closure.md "A filter wider than the cell").
+# With TABLE_CELLS (default CELLS) other than CELLS, perfect and heldout take the table of that grid (e.g. CELLS=8
+# TABLE_CELLS=4: the correction of the structures up to twice the cell, the recipe of docs/coarse.md on the 8-cell
+# grid); their runs are then labelled tableown<T> and tableheld<T> (tools/closure_wide_table.py).
 # Each on the grid of CELLS cells across (default 4: the paper's Figure 3 grid, 26.5 d_p in its box), sampled
 # 40-80 t_ref (a coarse grid seeds its clustering from little noise, as the half profile's COARSE_SET) with the
 # profile's COARSE_SET and PHI_SET_<phi> (the box, gamma* and t* of the resolved runs), then the
 # table of the slip error against each resolved run (tools/closure_wide_table.py) -> OUT/figure3_c<CELLS>/table.md.
 # A coarse run whose summary.h5 exists is not run again; a filtered file or table that exists is kept.
-# Environment: PROFILE (default paper), CELLS (default 4), BUILD (default build), NICE (default 0), NP (default 1:
-# ranks of each coarse run).
+# Environment: PROFILE (default paper), CELLS (default 4), TABLE_CELLS (default CELLS), BUILD (default build), NICE
+# (default 0), NP (default 1: ranks of each coarse run).
 # Exit status: 0 done (a coarse run that fails is reported and left out of the table); 2 bad arguments.
 set -euo pipefail
 repo=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
@@ -37,10 +45,13 @@ IFS=, read -r -a seeds <<< "${4:-1,2,3}"
 IFS=, read -r -a closures <<< "${5:-micro,radl,halfbox,perfect,model}"
 profile=${PROFILE:-paper}
 cells=${CELLS:-4}
+table_cells=${TABLE_CELLS:-$cells}
 build=${BUILD:-$repo/build}
 nice_level=${NICE:-0}
 np=${NP:-1}
 [[ $cells =~ ^[1-9][0-9]*$ ]] || { echo "figure3_box.sh: CELLS=$cells is not a positive integer" >&2; exit 2; }
+[[ $table_cells =~ ^[1-9][0-9]*$ ]] ||
+  { echo "figure3_box.sh: TABLE_CELLS=$table_cells is not a positive integer" >&2; exit 2; }
 [[ $np =~ ^[1-9][0-9]*$ ]] || { echo "figure3_box.sh: NP=$np is not a positive integer" >&2; exit 2; }
 launcher=()
 [ "$np" -gt 1 ] && launcher=(mpirun --allow-run-as-root --oversubscribe -np "$np")
@@ -54,6 +65,18 @@ dx=$(python3 -c "print($box_dp/$cells)")
 dir=$out/figure3_c$cells
 mkdir -p "$dir"
 say() { echo "[figure3] $*" >&2; }
+# the tables' closures need the runs' filtered files (their own for perfect, the others' for heldout)
+needs_filtered=0
+for c in "${closures[@]}"; do
+  case $c in
+    perfect | heldout) needs_filtered=1 ;;
+    micro | radl | halfbox | model | modelraw) ;;
+    radlr* | halfboxr* | modelr* | modelrawr*) [[ $c =~ ^[a-z]+r[0-9]+(\.[0-9]+)?$ ]] ||
+      { echo "figure3_box.sh: closure $c: a law's name and r<R>, R a number (e.g. radlr2)" >&2; exit 2; } ;;
+    *) echo "figure3_box.sh: closure $c is not one of micro, radl, halfbox, perfect, heldout, model, modelraw" \
+      "(or radl, halfbox, model, modelraw followed by r<R>)" >&2; exit 2 ;;
+  esac
+done
 # the resolved run is read only to make its summary (resolved_phi<phi>.h5) and, for perfect, its filtered file
 # (filtered_phi<phi>.h5) in OUT/figure3_c<CELLS>: its filtered file alone (the shipped data/filtered/<box>_phi<phi>.h5,
 # copied there) stands in for a run directory that is gone
@@ -72,19 +95,25 @@ if abs(width / box_dp - 1) > 0.01 or abs(p["solids_fraction"] - phi) > 1e-9:
 PY
     continue
   fi
-  [ -f "$dir/resolved_phi$phi.h5" ] && [[ " ${closures[*]} " != *" perfect "* ]] && continue
+  [ -f "$dir/resolved_phi$phi.h5" ] && [ $needs_filtered = 0 ] && continue
   echo "figure3_box.sh: $out/generate/phi$phi is not a finished run (and $dir has not its filtered_phi$phi.h5," \
     "from an earlier call or copied from data/filtered/)" >&2
   exit 2
 done
-for c in "${closures[@]}"; do
-  case $c in micro | radl | halfbox | perfect | model | modelraw) ;;
-    *) echo "figure3_box.sh: closure $c is not one of micro, radl, halfbox, perfect, model, modelraw" >&2; exit 2 ;;
-  esac
-done
 
-# per phi: the resolved reference, and the perfect table from the run's own filtered file (the profile's filter
-# settings with the grid of CELLS across added when the profile's grids lack it)
+# per phi: the resolved reference, the run's filtered file (the profile's filter settings) and the perfect table
+# from it; then the held-out tables from the other runs' files
+table_of() {  # KIND PHI -> the table file of perfect (own) or heldout
+  local suffix=
+  [ "$table_cells" = "$cells" ] || suffix=_t$table_cells
+  echo "$dir/$1_phi$2$suffix.h5"
+}
+grid_table() {  # OUT FILTERED... : cgd-fit --grid-table TABLE_CELLS, kept when it exists
+  local table=$1
+  shift
+  [ -f "$table" ] || "$build/cgd-fit" "$@" --grid-table "$table_cells" --force -o "$table" > "${table%.h5}.report.txt" 2>&1 ||
+    { cat "${table%.h5}.report.txt" >&2; exit 1; }
+}
 for phi in "${phis[@]}"; do
   ref=$dir/resolved_phi$phi.h5
   if [ ! -f "$ref" ]; then
@@ -94,17 +123,23 @@ for phi in "${phis[@]}"; do
       "$build/cgd-coarse" --summarise "$dir/filtered_phi$phi.h5" --force -o "$ref" > /dev/null
     fi
   fi
-  [[ " ${closures[*]} " == *" perfect "* ]] || continue
+  [ $needs_filtered = 1 ] || continue
   filtered=$dir/filtered_phi$phi.h5
   if [ ! -f "$filtered" ]; then
     say "filter phi = $phi"
     nice -n "$nice_level" "${launcher[@]}" "$build/cgd-filter" "$out/generate/phi$phi" "${filter_args[@]}" --force --quiet \
       -o "$filtered"
   fi
-  table=$dir/perfect_phi$phi.h5
-  [ -f "$table" ] || "$build/cgd-fit" "$filtered" --grid-table "$cells" --force -o "$table" > "${table%.h5}.report.txt" 2>&1 ||
-    { cat "${table%.h5}.report.txt" >&2; exit 1; }
+  [[ " ${closures[*]} " == *" perfect "* ]] && grid_table "$(table_of perfect "$phi")" "$filtered"
 done
+if [[ " ${closures[*]} " == *" heldout "* ]]; then
+  for phi in "${phis[@]}"; do
+    others=()
+    for f in "$dir"/filtered_phi*.h5; do [ "$f" = "$dir/filtered_phi$phi.h5" ] || others+=("$f"); done
+    [ ${#others[@]} -gt 0 ] || { echo "figure3_box.sh: heldout at $phi: no other run's filtered file in $dir" >&2; exit 2; }
+    grid_table "$(table_of heldout "$phi")" "${others[@]}"
+  done
+fi
 
 profile_coarse_sets
 coarse_sets+=(--set run.end_time_tref=80 --set run.sampling_start_tref=40)
@@ -113,17 +148,29 @@ for phi in "${phis[@]}"; do
   for alpha in "${alphas[@]}"; do
     for seed in "${seeds[@]}"; do
       for c in "${closures[@]}"; do
-        case $c in
+        law=$c label=$c ratio=()
+        if [[ $c =~ ^([a-z]+)r([0-9.]+)$ ]]; then
+          law=${BASH_REMATCH[1]} ratio=(--set fluid.filter_to_grid_ratio="${BASH_REMATCH[2]}")
+        fi
+        case $law in
           micro) args=() ;;
           radl) args=(--set fluid.drag=radl2014) ;;
           halfbox) args=(--model "$repo/data/models/half_box.h5") ;;
-          perfect) args=(--model "$dir/perfect_phi$phi.h5" --set fluid.parcel_correction=false) ;;
+          perfect | heldout)
+            args=(--model "$(table_of "$law" "$phi")" --set fluid.parcel_correction=false)
+            if [ "$table_cells" != "$cells" ]; then
+              label=tableown$table_cells
+              [ "$law" = heldout ] && label=tableheld$table_cells
+            elif [ "$law" = heldout ]; then
+              label=tableheld
+            fi ;;
           model | modelraw)
             [ -f "$out/fit/model.h5" ] || { say "no $out/fit/model.h5: the $c runs are left out"; continue; }
             args=(--model "$out/fit/model.h5")
-            if [ "$c" = modelraw ]; then args+=(--set fluid.parcel_correction=false); fi ;;
+            if [ "$law" = modelraw ]; then args+=(--set fluid.parcel_correction=false); fi ;;
         esac
-        coarse_run "$dir/phi${phi}_a${alpha}_${c}_s$seed" "$phi" "$alpha" "$seed" "${args[@]}" "${phi_sets[@]}"
+        coarse_run "$dir/phi${phi}_a${alpha}_${label}_s$seed" "$phi" "$alpha" "$seed" "${args[@]}" "${ratio[@]}" \
+          "${phi_sets[@]}"
       done
     done
   done

@@ -21,7 +21,7 @@ stub() {
 stub cgd-coarse '[ "$1" = --summarise ] && { touch "$out"; exit 0; }
 echo "$*" > "$out.args"
 exit 1'
-stub cgd-fit 'touch "$out"'
+stub cgd-fit 'echo "$*" > "$out.args"; touch "$out"'
 stub cgd-filter 'touch "$out"'
 
 # a filtered file as the script reads it: params/box_size_m, diameter_m, solids_fraction
@@ -65,6 +65,37 @@ at_dense_settings "$dense" &&
   ok "half: 0.30 at its PHI_SET (gamma* = 1e-3, t* = 0.05), after COARSE_SET" || fail "half: 0.30's contact settings: $dense"
 grep -q -- "--set particles.solids_fraction=0.30 " <<<"$dense" && grep -q -- "--model $out/figure3_c4/perfect_phi0.30.h5" <<<"$dense" &&
   ok "half: the perfect run at 0.30 with its own grid table" || fail "half: the perfect run's model: $dense"
+
+# ---- the 8-cell grid with the 4-cell grid's tables (TABLE_CELLS), held out, and laws at Delta = 2 cells ----
+out=$tmp/wide8
+for phi in 0.05 0.10 0.30; do fake_filtered "$out/figure3_c8/filtered_phi$phi.h5" 53 "$phi"; done
+mkdir -p "$out/fit" && touch "$out/fit/model.h5"
+PROFILE=half CELLS=8 TABLE_CELLS=4 BUILD=$tmp/bin bash scripts/figure3_box.sh "$out" 0.30 3 1 heldout,perfect,radlr2,modelrawr2 \
+  > "$tmp/wide8.log" 2>&1
+d=$out/figure3_c8
+held=$(args_of "$d/phi0.30_a3_tableheld4_s1") own=$(args_of "$d/phi0.30_a3_tableown4_s1")
+radl2=$(args_of "$d/phi0.30_a3_radlr2_s1") model2=$(args_of "$d/phi0.30_a3_modelrawr2_s1")
+fit_held=$(cat "$d/heldout_phi0.30_t4.h5.args" 2>/dev/null)
+[ -n "$fit_held" ] && grep -q -- "--grid-table 4" <<<"$fit_held" && grep -q "filtered_phi0.05.h5" <<<"$fit_held" &&
+  grep -q "filtered_phi0.10.h5" <<<"$fit_held" && ! grep -q "filtered_phi0.30.h5" <<<"$fit_held" &&
+  ok "heldout at 0.30: the 4-cell grid's table of the other runs' files (0.05, 0.10), not its own" ||
+  { fail "heldout table: ${fit_held:-not made}"; cat "$tmp/wide8.log"; }
+grep -q -- "--model $d/heldout_phi0.30_t4.h5 --set fluid.parcel_correction=false" <<<"$held" &&
+  grep -q -- "--model $d/perfect_phi0.30_t4.h5 --set fluid.parcel_correction=false" <<<"$own" &&
+  grep -q -- "--grid-table 4" "$d/perfect_phi0.30_t4.h5.args" &&
+  ok "the tables' runs labelled tableheld4 and tableown4, c_corr off" || fail "table runs: $held / $own"
+[ "$(last_set "$radl2" fluid.drag)" = radl2014 ] && [ "$(last_set "$radl2" fluid.filter_to_grid_ratio)" = 2 ] &&
+  grep -q -- "--model $out/fit/model.h5 --set fluid.parcel_correction=false" <<<"$model2" &&
+  [ "$(last_set "$model2" fluid.filter_to_grid_ratio)" = 2 ] &&
+  ok "radlr2 and modelrawr2: the laws at fluid.filter_to_grid_ratio = 2" || fail "r2 runs: $radl2 / $model2"
+before=$failures
+for c in "$held" "$own" "$radl2" "$model2"; do
+  [ "$(last_set "$c" fluid.dx_over_dp)" = 6.625 ] && at_dense_settings "$c" || fail "8-cell run: $c"
+done
+[ $failures -eq $before ] && ok "every 8-cell run on 6.625 d_p cells at 0.30's PHI_SET"
+PROFILE=half CELLS=8 BUILD=$tmp/bin bash scripts/figure3_box.sh "$out" 0.30 3 1 radlrx > "$tmp/bad.log" 2>&1
+status=$?
+[ $status -eq 2 ] && grep -q "closure radlrx" "$tmp/bad.log" && ok "closure radlrx: exit 2" || fail "radlrx: exit $status"
 
 # ---- the paper profile: its box is its base scene's; no COARSE_SET or PHI_SET ----
 out=$tmp/paper
