@@ -23,11 +23,14 @@
 #   heldout  the phi-bar table of the grid of TABLE_CELLS across fitted on the OTHER runs' filtered files in
 #            OUT/figure3_c<CELLS> (cgd-fit --grid-table of every filtered_phi*.h5 there but the run's own), c_corr off:
 #            the perfect closure's held-out twin, a closure the run has not seen;
+#   driftheld the drift-velocity closure held out: the drift table H(phi-bar, cell slip) of the grid of TABLE_CELLS
+#            across fitted on the same other files (cgd-fit --drift-table), fluid.drag = "drift", c_corr off
+#            (docs/closure.md "The drift-velocity closure");
 #   radl, halfbox, model, modelraw followed by r<R> (e.g. radlr2, modelrawr2): the law's correction at
 #            Delta = R cells (fluid.filter_to_grid_ratio = R; docs/closure.md "A filter wider than the cell").
 # With TABLE_CELLS (default CELLS) other than CELLS, perfect and heldout take the table of that grid (e.g. CELLS=8
 # TABLE_CELLS=4: the correction of the structures up to twice the cell, the recipe of docs/coarse.md on the 8-cell
-# grid); their runs are then labelled tableown<T> and tableheld<T> (tools/closure_wide_table.py).
+# grid); their runs are then labelled tableown<T>, tableheld<T> and driftheld<T> (tools/closure_wide_table.py).
 # Each on the grid of CELLS cells across (default 4: the paper's Figure 3 grid, 26.5 d_p in its box), sampled
 # 40-80 t_ref (a coarse grid seeds its clustering from little noise, as the half profile's COARSE_SET) with the
 # profile's COARSE_SET and PHI_SET_<phi> (the box, gamma* and t* of the resolved runs), then the
@@ -69,11 +72,11 @@ say() { echo "[figure3] $*" >&2; }
 needs_filtered=0
 for c in "${closures[@]}"; do
   case $c in
-    perfect | heldout) needs_filtered=1 ;;
+    perfect | heldout | driftheld) needs_filtered=1 ;;
     micro | radl | halfbox | model | modelraw) ;;
     radlr* | halfboxr* | modelr* | modelrawr*) [[ $c =~ ^[a-z]+r[0-9]+(\.[0-9]+)?$ ]] ||
       { echo "figure3_box.sh: closure $c: a law's name and r<R>, R a number (e.g. radlr2)" >&2; exit 2; } ;;
-    *) echo "figure3_box.sh: closure $c is not one of micro, radl, halfbox, perfect, heldout, model, modelraw" \
+    *) echo "figure3_box.sh: closure $c is not one of micro, radl, halfbox, perfect, heldout, driftheld, model, modelraw" \
       "(or radl, halfbox, model, modelraw followed by r<R>)" >&2; exit 2 ;;
   esac
 done
@@ -103,15 +106,15 @@ done
 
 # per phi: the resolved reference, the run's filtered file (the profile's filter settings) and the perfect table
 # from it; then the held-out tables from the other runs' files
-table_of() {  # KIND PHI -> the table file of perfect (own) or heldout
+table_of() {  # KIND PHI -> the table file of perfect (own), heldout or driftheld
   local suffix=
   [ "$table_cells" = "$cells" ] || suffix=_t$table_cells
   echo "$dir/$1_phi$2$suffix.h5"
 }
-grid_table() {  # OUT FILTERED... : cgd-fit --grid-table TABLE_CELLS, kept when it exists
-  local table=$1
-  shift
-  [ -f "$table" ] || "$build/cgd-fit" "$@" --grid-table "$table_cells" --force -o "$table" > "${table%.h5}.report.txt" 2>&1 ||
+grid_table() {  # OUT OPTION FILTERED... : cgd-fit OPTION (--grid-table or --drift-table) TABLE_CELLS, kept when it exists
+  local table=$1 option=$2
+  shift 2
+  [ -f "$table" ] || "$build/cgd-fit" "$@" "$option" "$table_cells" --force -o "$table" > "${table%.h5}.report.txt" 2>&1 ||
     { cat "${table%.h5}.report.txt" >&2; exit 1; }
 }
 for phi in "${phis[@]}"; do
@@ -130,16 +133,19 @@ for phi in "${phis[@]}"; do
     nice -n "$nice_level" "${launcher[@]}" "$build/cgd-filter" "$out/generate/phi$phi" "${filter_args[@]}" --force --quiet \
       -o "$filtered"
   fi
-  [[ " ${closures[*]} " == *" perfect "* ]] && grid_table "$(table_of perfect "$phi")" "$filtered"
+  if [[ " ${closures[*]} " == *" perfect "* ]]; then grid_table "$(table_of perfect "$phi")" --grid-table "$filtered"; fi
 done
-if [[ " ${closures[*]} " == *" heldout "* ]]; then
+for kind in heldout driftheld; do
+  [[ " ${closures[*]} " == *" $kind "* ]] || continue
+  option=--grid-table
+  [ $kind = driftheld ] && option=--drift-table
   for phi in "${phis[@]}"; do
     others=()
     for f in "$dir"/filtered_phi*.h5; do [ "$f" = "$dir/filtered_phi$phi.h5" ] || others+=("$f"); done
-    [ ${#others[@]} -gt 0 ] || { echo "figure3_box.sh: heldout at $phi: no other run's filtered file in $dir" >&2; exit 2; }
-    grid_table "$(table_of heldout "$phi")" "${others[@]}"
+    [ ${#others[@]} -gt 0 ] || { echo "figure3_box.sh: $kind at $phi: no other run's filtered file in $dir" >&2; exit 2; }
+    grid_table "$(table_of $kind "$phi")" $option "${others[@]}"
   done
-fi
+done
 
 profile_coarse_sets
 coarse_sets+=(--set run.end_time_tref=80 --set run.sampling_start_tref=40)
@@ -164,6 +170,9 @@ for phi in "${phis[@]}"; do
             elif [ "$law" = heldout ]; then
               label=tableheld
             fi ;;
+          driftheld)
+            args=(--set fluid.drag=drift --set fluid.drag_model="$(table_of driftheld "$phi")" --set fluid.parcel_correction=false)
+            [ "$table_cells" = "$cells" ] || label=driftheld$table_cells ;;
           model | modelraw)
             [ -f "$out/fit/model.h5" ] || { say "no $out/fit/model.h5: the $c runs are left out"; continue; }
             args=(--model "$out/fit/model.h5")

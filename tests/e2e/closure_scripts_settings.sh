@@ -70,16 +70,22 @@ grep -q -- "--set particles.solids_fraction=0.30 " <<<"$dense" && grep -q -- "--
 out=$tmp/wide8
 for phi in 0.05 0.10 0.30; do fake_filtered "$out/figure3_c8/filtered_phi$phi.h5" 53 "$phi"; done
 mkdir -p "$out/fit" && touch "$out/fit/model.h5"
-PROFILE=half CELLS=8 TABLE_CELLS=4 BUILD=$tmp/bin bash scripts/figure3_box.sh "$out" 0.30 3 1 heldout,perfect,radlr2,modelrawr2 \
+PROFILE=half CELLS=8 TABLE_CELLS=4 BUILD=$tmp/bin bash scripts/figure3_box.sh "$out" 0.30 3 1 heldout,driftheld,perfect,radlr2,modelrawr2 \
   > "$tmp/wide8.log" 2>&1
 d=$out/figure3_c8
 held=$(args_of "$d/phi0.30_a3_tableheld4_s1") own=$(args_of "$d/phi0.30_a3_tableown4_s1")
 radl2=$(args_of "$d/phi0.30_a3_radlr2_s1") model2=$(args_of "$d/phi0.30_a3_modelrawr2_s1")
-fit_held=$(cat "$d/heldout_phi0.30_t4.h5.args" 2>/dev/null)
+drift=$(args_of "$d/phi0.30_a3_driftheld4_s1")
+fit_held=$(cat "$d/heldout_phi0.30_t4.h5.args" 2>/dev/null) fit_drift=$(cat "$d/driftheld_phi0.30_t4.h5.args" 2>/dev/null)
 [ -n "$fit_held" ] && grep -q -- "--grid-table 4" <<<"$fit_held" && grep -q "filtered_phi0.05.h5" <<<"$fit_held" &&
   grep -q "filtered_phi0.10.h5" <<<"$fit_held" && ! grep -q "filtered_phi0.30.h5" <<<"$fit_held" &&
   ok "heldout at 0.30: the 4-cell grid's table of the other runs' files (0.05, 0.10), not its own" ||
   { fail "heldout table: ${fit_held:-not made}"; cat "$tmp/wide8.log"; }
+[ "${fit_drift%% --*}" = "${fit_held%% --*}" ] && grep -q -- "--drift-table 4" <<<"$fit_drift" &&
+  [ "$(last_set "$drift" fluid.drag)" = drift ] && [ "$(last_set "$drift" fluid.drag_model)" = "$d/driftheld_phi0.30_t4.h5" ] &&
+  [ "$(last_set "$drift" fluid.parcel_correction)" = false ] && at_dense_settings "$drift" &&
+  ok "driftheld at 0.30: the 4-cell drift table of the same other files, fluid.drag = drift (driftheld4)" ||
+  fail "driftheld: ${fit_drift:-no table} / ${drift:-no run}"
 grep -q -- "--model $d/heldout_phi0.30_t4.h5 --set fluid.parcel_correction=false" <<<"$held" &&
   grep -q -- "--model $d/perfect_phi0.30_t4.h5 --set fluid.parcel_correction=false" <<<"$own" &&
   grep -q -- "--grid-table 4" "$d/perfect_phi0.30_t4.h5.args" &&
