@@ -32,12 +32,13 @@
 # TABLE_CELLS=4: the correction of the structures up to twice the cell, the recipe of docs/coarse.md on the 8-cell
 # grid); their runs are then labelled tableown<T>, tableheld<T> and driftheld<T> (tools/closure_wide_table.py).
 # Each on the grid of CELLS cells across (default 4: the paper's Figure 3 grid, 26.5 d_p in its box), sampled
-# 40-80 t_ref (a coarse grid seeds its clustering from little noise, as the half profile's COARSE_SET) with the
+# over WINDOW (default 40-80 t_ref: a coarse parcel grid seeds its clustering from little noise, as the half profile's
+# COARSE_SET; alpha = 1 runs, as noisy as the resolved ones, may take the resolved runs' 20-50) with the
 # profile's COARSE_SET and PHI_SET_<phi> (the box, gamma* and t* of the resolved runs), then the
 # table of the slip error against each resolved run (tools/closure_wide_table.py) -> OUT/figure3_c<CELLS>/table.md.
 # A coarse run whose summary.h5 exists is not run again; a filtered file or table that exists is kept.
-# Environment: PROFILE (default paper), CELLS (default 4), TABLE_CELLS (default CELLS), BUILD (default build), NICE
-# (default 0), NP (default 1: ranks of each coarse run).
+# Environment: PROFILE (default paper), CELLS (default 4), TABLE_CELLS (default CELLS), WINDOW (default 40-80), BUILD
+# (default build), NICE (default 0), NP (default 1: ranks of each coarse run).
 # Exit status: 0 done (a coarse run that fails is reported and left out of the table); 2 bad arguments.
 set -euo pipefail
 repo=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
@@ -49,10 +50,14 @@ IFS=, read -r -a closures <<< "${5:-micro,radl,halfbox,perfect,model}"
 profile=${PROFILE:-paper}
 cells=${CELLS:-4}
 table_cells=${TABLE_CELLS:-$cells}
+window=${WINDOW:-40-80}
 build=${BUILD:-$repo/build}
 nice_level=${NICE:-0}
 np=${NP:-1}
 [[ $cells =~ ^[1-9][0-9]*$ ]] || { echo "figure3_box.sh: CELLS=$cells is not a positive integer" >&2; exit 2; }
+[[ $window =~ ^([0-9]+)-([0-9]+)$ ]] && [ "${BASH_REMATCH[1]}" -lt "${BASH_REMATCH[2]}" ] ||
+  { echo "figure3_box.sh: WINDOW=$window: expected START-END in t_ref, whole numbers, START < END (e.g. 40-80)" >&2; exit 2; }
+window_start=${BASH_REMATCH[1]} window_end=${BASH_REMATCH[2]}
 [[ $table_cells =~ ^[1-9][0-9]*$ ]] ||
   { echo "figure3_box.sh: TABLE_CELLS=$table_cells is not a positive integer" >&2; exit 2; }
 [[ $np =~ ^[1-9][0-9]*$ ]] || { echo "figure3_box.sh: NP=$np is not a positive integer" >&2; exit 2; }
@@ -148,7 +153,7 @@ for kind in heldout driftheld; do
 done
 
 profile_coarse_sets
-coarse_sets+=(--set run.end_time_tref=80 --set run.sampling_start_tref=40)
+coarse_sets+=(--set run.end_time_tref="$window_end" --set run.sampling_start_tref="$window_start")
 for phi in "${phis[@]}"; do
   profile_phi_sets "$phi"
   for alpha in "${alphas[@]}"; do

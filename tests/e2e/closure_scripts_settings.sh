@@ -102,6 +102,14 @@ done
 PROFILE=half CELLS=8 BUILD=$tmp/bin bash scripts/figure3_box.sh "$out" 0.30 3 1 radlrx > "$tmp/bad.log" 2>&1
 status=$?
 [ $status -eq 2 ] && grep -q "closure radlrx" "$tmp/bad.log" && ok "closure radlrx: exit 2" || fail "radlrx: exit $status"
+# WINDOW: the sampling window of alpha = 1 runs (the resolved runs' 20-50 t_ref); a window backwards is refused
+PROFILE=half CELLS=8 WINDOW=20-50 BUILD=$tmp/bin bash scripts/figure3_box.sh "$out" 0.30 1 1 micro > "$tmp/w.log" 2>&1
+c=$(args_of "$d/phi0.30_a1_micro_s1")
+[ "$(last_set "$c" run.end_time_tref)" = 50 ] && [ "$(last_set "$c" run.sampling_start_tref)" = 20 ] &&
+  ok "WINDOW=20-50: sampled 20-50 t_ref" || fail "WINDOW=20-50: $c"
+PROFILE=half CELLS=8 WINDOW=50-20 BUILD=$tmp/bin bash scripts/figure3_box.sh "$out" 0.30 1 1 micro > "$tmp/w.log" 2>&1
+status=$?
+[ $status -eq 2 ] && grep -q "WINDOW=50-20" "$tmp/w.log" && ok "WINDOW=50-20: exit 2" || fail "WINDOW=50-20: exit $status"
 
 # ---- the paper profile: its box is its base scene's; no COARSE_SET or PHI_SET ----
 out=$tmp/paper
