@@ -73,13 +73,15 @@ dx=$(python3 -c "print($box_dp/$cells)")
 dir=$out/figure3_c$cells
 mkdir -p "$dir"
 say() { echo "[figure3] $*" >&2; }
+# a law at Delta = R cells: its name, r, R (radlr2)
+at_ratio='^([a-z]+)r([0-9]+(\.[0-9]+)?)$'
 # the tables' closures need the runs' filtered files (their own for perfect, the others' for heldout)
 needs_filtered=0
 for c in "${closures[@]}"; do
   case $c in
     perfect | heldout | driftheld) needs_filtered=1 ;;
     micro | radl | halfbox | model | modelraw) ;;
-    radlr* | halfboxr* | modelr* | modelrawr*) [[ $c =~ ^[a-z]+r[0-9]+(\.[0-9]+)?$ ]] ||
+    radlr* | halfboxr* | modelr* | modelrawr*) [[ $c =~ $at_ratio ]] ||
       { echo "figure3_box.sh: closure $c: a law's name and r<R>, R a number (e.g. radlr2)" >&2; exit 2; } ;;
     *) echo "figure3_box.sh: closure $c is not one of micro, radl, halfbox, perfect, heldout, driftheld, model, modelraw" \
       "(or radl, halfbox, model, modelraw followed by r<R>)" >&2; exit 2 ;;
@@ -111,10 +113,12 @@ done
 
 # per phi: the resolved reference, the run's filtered file (the profile's filter settings) and the perfect table
 # from it; then the held-out tables from the other runs' files
+# a table of another grid than the runs' is named for it: files KIND_phi<phi>_t<T>.h5, runs tableown<T>, tableheld<T>,
+# driftheld<T>
+other_grid=
+[ "$table_cells" = "$cells" ] || other_grid=$table_cells
 table_of() {  # KIND PHI -> the table file of perfect (own), heldout or driftheld
-  local suffix=
-  [ "$table_cells" = "$cells" ] || suffix=_t$table_cells
-  echo "$dir/$1_phi$2$suffix.h5"
+  echo "$dir/$1_phi$2${other_grid:+_t$other_grid}.h5"
 }
 grid_table() {  # OUT OPTION FILTERED... : cgd-fit OPTION (--grid-table or --drift-table) TABLE_CELLS, kept when it exists
   local table=$1 option=$2
@@ -160,24 +164,22 @@ for phi in "${phis[@]}"; do
     for seed in "${seeds[@]}"; do
       for c in "${closures[@]}"; do
         law=$c label=$c ratio=()
-        if [[ $c =~ ^([a-z]+)r([0-9.]+)$ ]]; then
+        if [[ $c =~ $at_ratio ]]; then
           law=${BASH_REMATCH[1]} ratio=(--set fluid.filter_to_grid_ratio="${BASH_REMATCH[2]}")
         fi
         case $law in
           micro) args=() ;;
           radl) args=(--set fluid.drag=radl2014) ;;
           halfbox) args=(--model "$repo/data/models/half_box.h5") ;;
-          perfect | heldout)
-            args=(--model "$(table_of "$law" "$phi")" --set fluid.parcel_correction=false)
-            if [ "$table_cells" != "$cells" ]; then
-              label=tableown$table_cells
-              [ "$law" = heldout ] && label=tableheld$table_cells
-            elif [ "$law" = heldout ]; then
-              label=tableheld
-            fi ;;
+          perfect)
+            args=(--model "$(table_of perfect "$phi")" --set fluid.parcel_correction=false)
+            [ -z "$other_grid" ] || label=tableown$other_grid ;;
+          heldout)
+            args=(--model "$(table_of heldout "$phi")" --set fluid.parcel_correction=false)
+            label=tableheld$other_grid ;;
           driftheld)
             args=(--set fluid.drag=drift --set fluid.drag_model="$(table_of driftheld "$phi")" --set fluid.parcel_correction=false)
-            [ "$table_cells" = "$cells" ] || label=driftheld$table_cells ;;
+            label=driftheld$other_grid ;;
           model | modelraw)
             [ -f "$out/fit/model.h5" ] || { say "no $out/fit/model.h5: the $c runs are left out"; continue; }
             args=(--model "$out/fit/model.h5")

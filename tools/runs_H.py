@@ -37,13 +37,8 @@ import h5py
 import numpy as np
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from compare_boxes import read_grids  # noqa: E402
+from compare_boxes import fail, read_grids  # noqa: E402  (fail: exit 2 named by the running tool)
 from plot_filtered import radl2014  # noqa: E402
-
-
-def fail(msg):
-    print(f"runs_H.py: {msg}", file=sys.stderr)
-    sys.exit(2)
 
 
 def read_run(path, grids):
