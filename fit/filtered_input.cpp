@@ -4,6 +4,11 @@
 
 #include <algorithm>
 #include <cmath>
+#include <map>
+#include <random>
+
+#include <gsl/gsl_statistics_double.h>
+#include <gsl/gsl_sort.h>
 
 #include "core/checksum.hpp"
 #include "core/drag.hpp"
@@ -55,6 +60,120 @@ FilteredFile read_filtered_file(const std::string& path) {
   for (std::size_t i = 0; i < s.groups.size(); ++i)
     (s.groups[i].kind == schema::FilterKind::Grid ? out.grids : out.widths).push_back(width_series(s.groups[i], paths[i]));
   out.checksum = file_checksum_fnv1a(path);
+  return out;
+}
+
+FilteredFile pool_runs(const std::vector<FilteredFile>& files, std::uint64_t seed, int replicates) {
+  if (files.empty()) throw InputError("--pool-runs: no filtered file given");
+  if (files.size() == 1) return files.front();  // its H is already the pooled H of its runs
+  check_same_physics(files);
+  const FilteredFile& first = files.front();
+  const std::size_t nb = first.bins();
+  FilteredFile out;
+  out.path = "pooled runs of " + std::to_string(files.size()) + " files";
+  out.scene_toml = first.scene_toml;
+  out.physics = first.physics;
+  out.phi_edges = first.phi_edges;
+  out.has_per_snapshot = true;
+  // the runs one file after the other (run index offset by the runs before), each (run, block) a block of its own
+  std::vector<std::int64_t> block_id;  // a global block of every snapshot row
+  std::map<std::pair<std::int64_t, std::int64_t>, std::int64_t> ids;
+  std::int64_t run_offset = 0;
+  for (const FilteredFile& f : files) {
+    if (!f.has_per_snapshot)
+      throw InputError(f.path + ": --pool-runs needs the per-snapshot sums (/width_<k>/per_snapshot); filter the run "
+                       "with this cgd-filter");
+    const auto& a = f.widths;
+    const auto& b = first.widths;
+    const bool same_series = a.size() == b.size() && f.grids.size() == first.grids.size();
+    auto same = [](const WidthSeries& x, const WidthSeries& y) {
+      return x.group == y.group && std::abs(x.F - y.F) <= 1e-6 * std::abs(y.F) && x.cells_across == y.cells_across;
+    };
+    bool ok = same_series;
+    for (std::size_t i = 0; ok && i < a.size(); ++i) ok = same(a[i], b[i]);
+    for (std::size_t i = 0; ok && i < f.grids.size(); ++i) ok = same(f.grids[i], first.grids[i]);
+    if (!ok)
+      throw InputError(f.path + " and " + first.path + ": --pool-runs pools files of the same widths and grids (groups, "
+                       "F, cells across); filter the runs with the same --widths and --grids");
+    out.run_paths.insert(out.run_paths.end(), f.run_paths.begin(), f.run_paths.end());
+    std::int64_t runs_here = static_cast<std::int64_t>(f.runs());
+    for (std::size_t k = 0; k < f.snapshots(); ++k) {
+      const std::int64_t run = run_offset + f.snapshot_run[k];
+      runs_here = std::max(runs_here, f.snapshot_run[k] + 1);
+      out.snapshot_run.push_back(run);
+      out.snapshot_block.push_back(f.snapshot_block[k]);
+      const auto key = std::make_pair(run, f.snapshot_block[k]);
+      const auto it = ids.emplace(key, static_cast<std::int64_t>(ids.size())).first;
+      block_id.push_back(it->second);
+    }
+    run_offset += runs_here;
+    out.pooled_paths.push_back(f.path);
+    out.pooled_checksums.push_back(f.checksum);
+  }
+  std::vector<std::vector<std::int64_t>> blocks_of_run(static_cast<std::size_t>(run_offset));
+  for (const auto& [key, id] : ids) blocks_of_run[static_cast<std::size_t>(key.first)].push_back(id);
+  const std::size_t n_blocks = ids.size();
+  // one series: the sums of every file's rows, its totals, its block sums and the bootstrap interval of H
+  auto pooled = [&](auto series_of) {
+    WidthSeries w = series_of(first);
+    w.drift.reset();
+    w.numerator.clear(), w.micro.clear(), w.snapshot_count.clear();
+    std::vector<double> count(nb, 0.0), phi_sum(nb, 0.0);
+    for (const FilteredFile& f : files) {
+      const WidthSeries& s = series_of(f);
+      w.numerator.insert(w.numerator.end(), s.numerator.begin(), s.numerator.end());
+      w.micro.insert(w.micro.end(), s.micro.begin(), s.micro.end());
+      w.snapshot_count.insert(w.snapshot_count.end(), s.snapshot_count.begin(), s.snapshot_count.end());
+      for (std::size_t b = 0; b < nb; ++b)
+        if (s.count[b] > 0 && std::isfinite(s.phi_mean[b]))
+          count[b] += static_cast<double>(s.count[b]), phi_sum[b] += static_cast<double>(s.count[b]) * s.phi_mean[b];
+    }
+    const double nan = std::nan("");
+    std::vector<double> block_num(n_blocks * nb, 0.0), block_mic(n_blocks * nb, 0.0), num(nb, 0.0), mic(nb, 0.0);
+    for (std::size_t k = 0; k < block_id.size(); ++k)
+      for (std::size_t b = 0; b < nb; ++b) {
+        const auto blk = static_cast<std::size_t>(block_id[k]);
+        block_num[blk * nb + b] += w.numerator[k * nb + b];
+        block_mic[blk * nb + b] += w.micro[k * nb + b];
+        num[b] += w.numerator[k * nb + b];
+        mic[b] += w.micro[k * nb + b];
+      }
+    w.H.assign(nb, nan), w.H_low.assign(nb, nan), w.H_high.assign(nb, nan), w.phi_mean.assign(nb, nan);
+    w.count.assign(nb, 0);
+    for (std::size_t b = 0; b < nb; ++b) {
+      w.count[b] = static_cast<std::int64_t>(std::llround(count[b]));
+      if (count[b] > 0) w.phi_mean[b] = phi_sum[b] / count[b];
+      if (count[b] > 0 && mic[b] != 0.0) w.H[b] = 1.0 - num[b] / mic[b];
+    }
+    std::mt19937_64 rng(seed);
+    std::vector<std::vector<double>> reps(nb);
+    std::vector<double> mult(n_blocks);
+    for (int r = 0; r < replicates; ++r) {
+      std::fill(mult.begin(), mult.end(), 0.0);
+      for (const auto& blocks : blocks_of_run) {
+        if (blocks.empty()) continue;
+        std::uniform_int_distribution<std::size_t> pick(0, blocks.size() - 1);
+        for (std::size_t j = 0; j < blocks.size(); ++j) mult[static_cast<std::size_t>(blocks[pick(rng)])] += 1.0;
+      }
+      for (std::size_t b = 0; b < nb; ++b) {
+        double n = 0, m = 0;
+        for (std::size_t blk = 0; blk < n_blocks; ++blk)
+          if (mult[blk] != 0.0) n += mult[blk] * block_num[blk * nb + b], m += mult[blk] * block_mic[blk * nb + b];
+        if (m != 0.0) reps[b].push_back(1.0 - n / m);
+      }
+    }
+    for (std::size_t b = 0; b < nb; ++b) {
+      if (!std::isfinite(w.H[b]) || reps[b].size() < 2) continue;
+      gsl_sort(reps[b].data(), 1, reps[b].size());  // percentile of type 7, as cgd-filter's (filter/statistics.hpp)
+      w.H_low[b] = gsl_stats_quantile_from_sorted_data(reps[b].data(), 1, reps[b].size(), 0.025);
+      w.H_high[b] = gsl_stats_quantile_from_sorted_data(reps[b].data(), 1, reps[b].size(), 0.975);
+    }
+    return w;
+  };
+  for (std::size_t i = 0; i < first.widths.size(); ++i)
+    out.widths.push_back(pooled([i](const FilteredFile& f) -> const WidthSeries& { return f.widths[i]; }));
+  for (std::size_t i = 0; i < first.grids.size(); ++i)
+    out.grids.push_back(pooled([i](const FilteredFile& f) -> const WidthSeries& { return f.grids[i]; }));
   return out;
 }
 

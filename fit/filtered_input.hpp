@@ -50,6 +50,8 @@ struct FilteredFile {
   std::vector<std::string> run_paths;  // /runs paths
   std::vector<std::int64_t> snapshot_run, snapshot_block;  // /snapshots/run_index, block
   bool has_per_snapshot = false;
+  // pool_runs: the files pooled into this one (their paths and checksums: the model's /sources); empty otherwise
+  std::vector<std::string> pooled_paths, pooled_checksums;
   std::size_t bins() const { return phi_edges.empty() ? 0 : phi_edges.size() - 1; }
   std::size_t snapshots() const { return snapshot_run.size(); }
   std::size_t runs() const { return run_paths.size(); }
@@ -58,6 +60,19 @@ struct FilteredFile {
 /// Read one filtered file through schema::read_filtered (InputError naming the file and the attribute or
 /// dataset: docs/schema-filtered.md "What the reader checks") and keep what the fit uses.
 FilteredFile read_filtered_file(const std::string& path);
+
+/// The runs of several filtered files as one file of all of them (cgd-fit --pool-runs; docs/fit.md "Pooled runs"), as
+/// cgd-filter writes a file of several runs: per width and bin the totals over every snapshot of every run (H = 1 -
+/// sum N / sum beta_micro u_slip, the samples, their mean phi) and the 95 % interval of H from a block bootstrap as
+/// cgd-filter's (`replicates` replicates, each drawing within each run as many of its snapshot blocks as it has, with
+/// replacement; percentile interval; std::mt19937_64 seeded with `seed`); the per-snapshot sums one file after the
+/// other, the runs numbered on. Fitted, each bin's H then weighs the runs by their share of its drag (the pooled
+/// ratio); fitted side by side, each run's H is a point of its own weighted by its interval. path "pooled runs of
+/// <n> files"; pooled_paths, pooled_checksums: the files. The drift sums are not carried (the spline fit does not use
+/// them; --drift-table pools the files' sums itself). InputError naming the files when one lacks the per-snapshot
+/// sums or the widths and grids differ (group, F, cells across); the physics and bins are check_same_physics'. One
+/// file is returned as it is (its H is the pooled H of its runs already).
+FilteredFile pool_runs(const std::vector<FilteredFile>& files, std::uint64_t seed, int replicates = 1000);
 
 /// The files as the fitter sees them for an operator: Box leaves them as read; Grid puts each file's
 /// coarse grids (/grids/<N>, then /whole_box as a check) in place of its box widths, so that every step

@@ -56,6 +56,11 @@ struct FitOptions {
   CalibrationOperator calibration_operator = CalibrationOperator::Box;
 };
 
+/// cgd-fit's min_width_over_cell on the grid operator (when --min-width-over-cell is not given): every grid coarser
+/// than the resolved one is data (the 12-across grid of the half box is 1.33 resolved cells); a grid of the resolved
+/// cells is the identity (H_grid = 0 by construction), a check.
+inline constexpr double kGridMinWidthOverCell = 1.01;
+
 /// The per-bin estimate of step 1.
 struct BinEstimate {
   double phi = 0;  // count-weighted mean phi of the bin's samples

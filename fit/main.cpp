@@ -62,6 +62,11 @@ int main(int argc, char** argv) {
     app.add_flag("--quiet", quiet, "Print no report");
     bool force = false;
     app.add_flag("--force", force, "Overwrite an existing output file (never one of the inputs)");
+    bool pool = false;
+    app.add_flag("--pool-runs", pool,
+                 "Fit the runs' pooled H: per width and bin the ratio of the sums over every run of every file (each "
+                 "run weighted by its share of the bin's drag, as one filtered file of all the runs holds it) instead of "
+                 "each file's H as a series of its own (docs/fit.md \"Pooled runs\")");
     std::string op = "box";
     app.add_option("--operator", op,
                    "What the model is calibrated on: \"box\" (the box widths /width_<k>, default) or \"grid\" (H_grid "
@@ -106,6 +111,9 @@ int main(int argc, char** argv) {
       options.width_exponent = n;
     }
 
+    if (pool && (app.count("--drift-table") || app.count("--grid-table") || !parcel_model.empty()))
+      throw cgd::InputError("cgd-fit: --pool-runs pools the runs of a spline fit; --grid-table and --drift-table pool "
+                            "the files' sums already, --parcel-fit reads coarse runs: give it without them");
     if (parcel_model.empty())  // a run directory is filtered first: say so (not "not a regular file")
       for (const std::string& in : inputs)
         if (std::filesystem::is_directory(in))
@@ -145,9 +153,8 @@ int main(int argc, char** argv) {
     if (app.count("--drift-table") && app.count("--grid-table"))
       throw cgd::InputError("cgd-fit: --drift-table and --grid-table each write one table model: give one");
     options.calibration_operator = *calibration;
-    // a grid equal to the resolved one is the identity (H_grid = 0 by construction): a check, not data
     if (*calibration == cgd::CalibrationOperator::Grid && !app.count("--min-width-over-cell"))
-      options.min_width_over_cell = 1.01;
+      options.min_width_over_cell = cgd::fit::kGridMinWidthOverCell;
     // every input read and checked before anything is written
     std::vector<cgd::fit::FilteredFile> files;
     for (const std::string& path : inputs) files.push_back(cgd::fit::read_filtered_file(path));
@@ -168,6 +175,7 @@ int main(int argc, char** argv) {
       if (!quiet) std::cout << report << "wrote " << output << "\n";
       return cgd::kExitOk;
     }
+    if (pool) files = {cgd::fit::pool_runs(files, options.seed)};
     files = cgd::fit::select_operator(files, *calibration);
     const cgd::Scene scene =
         cgd::load_scene_from_string(files.front().scene_toml, files.front().path + " (scene)");

@@ -45,7 +45,15 @@ DragModelFile model_record(const DragModel& M, const std::string& model_form, co
 
 /// /sources: the filtered files a model was made from, with their checksums.
 void set_sources(DragModelFile& m, const std::vector<FilteredFile>& files) {
-  for (const FilteredFile& ff : files) m.source_files.push_back(ff.path), m.source_checksums.push_back(ff.checksum);
+  for (const FilteredFile& ff : files) {
+    if (!ff.pooled_paths.empty()) {  // pool_runs: the files it pooled
+      m.sources_pooled = true;
+      m.source_files.insert(m.source_files.end(), ff.pooled_paths.begin(), ff.pooled_paths.end());
+      m.source_checksums.insert(m.source_checksums.end(), ff.pooled_checksums.begin(), ff.pooled_checksums.end());
+      continue;
+    }
+    m.source_files.push_back(ff.path), m.source_checksums.push_back(ff.checksum);
+  }
 }
 
 /// The Delta fitted (ascending, distinct) and, on grids, their cells across.

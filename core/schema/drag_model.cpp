@@ -312,6 +312,7 @@ void write_sources(h5::File& f, const M& m) {
   f.set_attr(kSources, "files", m.source_files);
   f.set_attr(kSources, "checksums", m.source_checksums);
   f.set_attr(kSources, "checksum_kind", std::string(kChecksumKind));
+  f.set_attr(kSources, "pooled_runs", static_cast<std::int64_t>(m.sources_pooled ? 1 : 0));
 }
 
 // ---- read ---------------------------------------------------------------------------------------
@@ -596,6 +597,12 @@ std::optional<Drift> read_drift_table(const h5::File& f, const M& m) {
 void read_sources_and_provenance(const h5::File& f, M& m) {
   if (f.has_attr(kSources, "files")) m.source_files = f.attr_strings(kSources, "files");
   if (f.has_attr(kSources, "checksums")) m.source_checksums = f.attr_strings(kSources, "checksums");
+  if (f.has_attr(kSources, "pooled_runs")) {  // absent (files written before it): the files side by side
+    const std::int64_t pooled = f.attr_int(kSources, "pooled_runs");
+    if (pooled != 0 && pooled != 1)
+      refuse(f, "attribute 'pooled_runs' of '/sources' is " + std::to_string(pooled) + ", expected 0 or 1");
+    m.sources_pooled = pooled == 1;
+  }
   if (f.exists(kProvenance))
     for (const char* key : kProvenanceKeys)
       if (f.has_attr(kProvenance, key)) m.provenance.emplace_back(key, f.attr_string(kProvenance, key));

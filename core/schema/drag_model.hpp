@@ -125,6 +125,7 @@ struct DragModelFile {
   std::optional<DriftTable> drift_table;
 
   std::vector<std::string> source_files, source_checksums;  // `/sources`
+  bool sources_pooled = false;  // `/sources` pooled_runs: fitted on the files' pooled runs (cgd-fit --pool-runs)
 
   // read, not written by write_drag_model: the common attributes and /provenance (data/models/*.h5)
   std::string code_version, created, scene_toml;

@@ -502,6 +502,7 @@ DragModelFile model_record() {
   d.cv_files = {"f.h5", "f.h5"}, d.cv_run = {0, 1}, d.cv_points = {5, 6}, d.cv_rms = {0.2, 0.3}, d.cv_mean = {0, 0.1};
   m.diagnostics = d;
   m.source_files = {"f.h5"}, m.source_checksums = {"0123456789abcdef"};
+  m.sources_pooled = true;
   return m;
 }
 
@@ -593,6 +594,7 @@ TEST(DragModelSchema, RoundTripKeepsEveryField) {
   EXPECT_EQ(x.cv_files, y.cv_files);
   EXPECT_EQ(r.source_files, m.source_files);
   EXPECT_EQ(r.source_checksums, m.source_checksums);
+  EXPECT_TRUE(r.sources_pooled);
   EXPECT_FALSE(r.code_version.empty());
   // the closed choices as stored: the model file's spellings
   File f = File::open_read(path, MPI_COMM_SELF);
@@ -681,6 +683,7 @@ TEST(DragModelSchema, RefusesDamagedFilesNamingTheFileAndTheKey) {
       {"runs_phi", removed_attribute_values("/c_corr", "runs_phi", {0.05}), "runs_phi", "one per entry of 'runs'"},
       {"k_interval", removed_attribute_values("/c_corr", "k_interval", {0.1, 0.2, 0.3}), "k_interval", "expected 2"},
       {"no_decision", remove_attribute("/c_corr", "decision"), "decision", "lacks"},
+      {"pooled_runs", attribute_number("/sources", "pooled_runs", 2.0), "pooled_runs", ""},
   };
   expect_refused(good, cases, [](const std::string& p) { cgd::schema::read_drag_model(p); });
 }
