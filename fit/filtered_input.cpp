@@ -6,6 +6,7 @@
 #include <cmath>
 #include <map>
 #include <random>
+#include <sstream>
 
 #include <gsl/gsl_statistics_double.h>
 #include <gsl/gsl_sort.h>
@@ -70,7 +71,9 @@ FilteredFile pool_runs(const std::vector<FilteredFile>& files, std::uint64_t see
   const FilteredFile& first = files.front();
   const std::size_t nb = first.bins();
   FilteredFile out;
-  out.path = "pooled runs of " + std::to_string(files.size()) + " files";
+  out.path = "pooled(";
+  for (std::size_t i = 0; i < files.size(); ++i) out.path += (i ? " + " : "") + files[i].path;
+  out.path += ")";
   out.scene_toml = first.scene_toml;
   out.physics = first.physics;
   out.phi_edges = first.phi_edges;
@@ -83,18 +86,29 @@ FilteredFile pool_runs(const std::vector<FilteredFile>& files, std::uint64_t see
     if (!f.has_per_snapshot)
       throw InputError(f.path + ": --pool-runs needs the per-snapshot sums (/width_<k>/per_snapshot); filter the run "
                        "with this cgd-filter");
-    const auto& a = f.widths;
-    const auto& b = first.widths;
-    const bool same_series = a.size() == b.size() && f.grids.size() == first.grids.size();
-    auto same = [](const WidthSeries& x, const WidthSeries& y) {
-      return x.group == y.group && std::abs(x.F - y.F) <= 1e-6 * std::abs(y.F) && x.cells_across == y.cells_across;
+    // the same series in the same order: group, F and cells across (what differs is named)
+    auto describe = [](const std::vector<WidthSeries>& v) {
+      std::string s;
+      for (const WidthSeries& w : v) {
+        std::ostringstream F;
+        F << w.F;
+        s += (s.empty() ? "" : ", ") + w.group + " (F = " + F.str() + ")";
+      }
+      return s.empty() ? std::string("none") : s;
     };
-    bool ok = same_series;
-    for (std::size_t i = 0; ok && i < a.size(); ++i) ok = same(a[i], b[i]);
-    for (std::size_t i = 0; ok && i < f.grids.size(); ++i) ok = same(f.grids[i], first.grids[i]);
-    if (!ok)
-      throw InputError(f.path + " and " + first.path + ": --pool-runs pools files of the same widths and grids (groups, "
-                       "F, cells across); filter the runs with the same --widths and --grids");
+    auto same = [](const std::vector<WidthSeries>& x, const std::vector<WidthSeries>& y) {
+      if (x.size() != y.size()) return false;
+      for (std::size_t i = 0; i < x.size(); ++i)
+        if (x[i].group != y[i].group || std::abs(x[i].F - y[i].F) > 1e-6 * std::abs(y[i].F) ||
+            x[i].cells_across != y[i].cells_across)
+          return false;
+      return true;
+    };
+    for (const auto kind : {&FilteredFile::widths, &FilteredFile::grids})
+      if (!same(f.*kind, first.*kind))
+        throw InputError(f.path + " and " + first.path + ": --pool-runs pools files of the same widths and grids; " +
+                         f.path + " has " + describe(f.*kind) + ", " + first.path + " " + describe(first.*kind) +
+                         " (filter the runs with the same --widths and --grids)");
     out.run_paths.insert(out.run_paths.end(), f.run_paths.begin(), f.run_paths.end());
     std::int64_t runs_here = static_cast<std::int64_t>(f.runs());
     for (std::size_t k = 0; k < f.snapshots(); ++k) {

@@ -112,8 +112,11 @@ int main(int argc, char** argv) {
     }
 
     if (pool && (app.count("--drift-table") || app.count("--grid-table") || !parcel_model.empty()))
-      throw cgd::InputError("cgd-fit: --pool-runs pools the runs of a spline fit; --grid-table and --drift-table pool "
-                            "the files' sums already, --parcel-fit reads coarse runs: give it without them");
+      throw cgd::InputError(std::string("cgd-fit: --pool-runs with ") +
+                            (app.count("--grid-table") ? "--grid-table" : app.count("--drift-table") ? "--drift-table"
+                                                                                                    : "--parcel-fit") +
+                            ": --pool-runs pools the runs of a spline fit; --grid-table and --drift-table pool the "
+                            "files' sums already, --parcel-fit reads coarse runs: give it without them");
     if (parcel_model.empty())  // a run directory is filtered first: say so (not "not a regular file")
       for (const std::string& in : inputs)
         if (std::filesystem::is_directory(in))
@@ -175,8 +178,8 @@ int main(int argc, char** argv) {
       if (!quiet) std::cout << report << "wrote " << output << "\n";
       return cgd::kExitOk;
     }
+    files = cgd::fit::select_operator(files, *calibration);  // first: its refusals name the file
     if (pool) files = {cgd::fit::pool_runs(files, options.seed)};
-    files = cgd::fit::select_operator(files, *calibration);
     const cgd::Scene scene =
         cgd::load_scene_from_string(files.front().scene_toml, files.front().path + " (scene)");
     const cgd::fit::FitResult result = cgd::fit::fit_filtered_drag(files, options, nullptr);

@@ -42,7 +42,8 @@ expect_bad() {
 make -o "$tmp/good.h5" --seed 1 && make -o "$tmp/good2.h5" --seed 2 &&
   make -o "$tmp/snapshot.h5" --format snapshot && make -o "$tmp/wenyu.h5" --micro-drag wen-yu &&
   make -o "$tmp/thick.h5" --diameter 100e-6 && make -o "$tmp/two_widths.h5" --widths 2 &&
-  make -o "$tmp/three_bins.h5" --bins 3 || { echo "FAIL: could not make the synthetic files"; exit 1; }
+  make -o "$tmp/three_bins.h5" --bins 3 && make -o "$tmp/bare.h5" --seed 3 --no-per-snapshot ||
+  { echo "FAIL: could not make the synthetic files"; exit 1; }
 
 expect_bad missing-file        "$tmp/nope.h5"                                    -- "$tmp/nope.h5"
 expect_bad not-filtered        "$tmp/snapshot.h5" "cgd_format" "not a filtered file" -- "$tmp/snapshot.h5"
@@ -56,6 +57,12 @@ expect_bad zero-width-exponent "--width-exponent 0" "(0, 10]"                   
 expect_bad operator-no-grids   "$tmp/good.h5" "/grids" "cgd-filter --grids"      -- "$tmp/good.h5" --operator grid
 expect_bad operator-unknown    "--operator tent" "box" "grid"                    -- "$tmp/good.h5" --operator tent
 expect_bad grid-table-no-grid  "$tmp/good.h5" "--grid-table 4" "/grids/4"        -- "$tmp/good.h5" --grid-table 4
+# --pool-runs (docs/fit.md "Pooled runs"): with a table or the parcel fit, files it cannot pool
+expect_bad pool-grid-table     "--pool-runs with --grid-table"                   -- "$tmp/good.h5" "$tmp/good2.h5" --pool-runs --grid-table 4
+expect_bad pool-drift-table    "--pool-runs with --drift-table"                  -- "$tmp/good.h5" "$tmp/good2.h5" --pool-runs --drift-table 4
+expect_bad pool-parcel-fit     "--pool-runs with --parcel-fit"                   -- "$tmp" --pool-runs --parcel-fit "$tmp/good.h5"
+expect_bad pool-no-snapshots   "$tmp/bare.h5" "per-snapshot sums"                -- "$tmp/good.h5" "$tmp/bare.h5" --pool-runs
+expect_bad pool-other-widths   "$tmp/two_widths.h5" "same widths and grids" "/width_1" -- "$tmp/good.h5" "$tmp/two_widths.h5" --pool-runs
 # the model file's directory does not exist: refused before the fit
 status=0; "$fit" "$tmp/good.h5" -o "$tmp/no/such/dir/model.h5" >"$tmp/stdout" 2>"$tmp/stderr" || status=$?
 if [ $status -eq 2 ] && grep -qF "$tmp/no/such/dir" "$tmp/stderr" && [ ! -e "$tmp/no" ]; then
@@ -70,6 +77,20 @@ if "$fit" "$tmp/good.h5" "$tmp/good2.h5" --bootstrap 50 -o "$tmp/model.h5" >"$tm
   echo "ok   good-files: $(grep 'cross-validation' "$tmp/stdout")"
 else
   echo "FAIL good-files"; sed 's/^/     /' "$tmp/stderr"; failures=$((failures + 1))
+fi
+# the same pair pooled: written, /sources says so and lists both files
+if "$fit" "$tmp/good.h5" "$tmp/good2.h5" --pool-runs --bootstrap 50 -o "$tmp/pooled.h5" >"$tmp/stdout" 2>"$tmp/stderr" &&
+   /usr/bin/python3 - "$tmp/pooled.h5" "$tmp/good.h5" "$tmp/good2.h5" <<'PY'
+import sys, h5py
+with h5py.File(sys.argv[1], "r") as f:
+    s = f["sources"].attrs
+    files = [x.decode() if isinstance(x, bytes) else str(x) for x in s["files"]]
+    sys.exit(0 if int(s["pooled_runs"]) == 1 and files == sys.argv[2:] else 1)
+PY
+then
+  echo "ok   good-files-pooled: $(grep 'cross-validation' "$tmp/stdout")"
+else
+  echo "FAIL good-files-pooled"; sed 's/^/     /' "$tmp/stderr"; failures=$((failures + 1))
 fi
 # an existing output: refused without --force (exit 2, the file unchanged), replaced with it
 cp "$tmp/model.h5" "$tmp/model_before.h5"

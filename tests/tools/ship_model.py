@@ -4,8 +4,9 @@ paper's c_corr and no /provenance as cgd-fit writes it): the copy carries the
 four provenance texts of the TOML file (white space folded to one line), c_corr = 1 with --no-parcel-correction and
 the model's own c_corr without it, and every other attribute and dataset of the input unchanged (compared one by
 one); the input is not touched. Refused with exit 2, one line naming the file and the key, no traceback, no output
-and no .part left: a key missing, an unknown key, an empty text, a file that is not TOML, an input that is not a
-model file, an existing output without --force, the output the input itself.
+and no .part left: a key missing, an unknown key, an empty text, a file that is not TOML or not UTF-8, an input that
+is not a model file, --no-parcel-correction on a parcel-fitted model, an existing output without --force, the output
+the input itself.
 usage: /usr/bin/python3 tests/tools/ship_model.py SOURCE_DIR"""
 import hashlib
 import os
@@ -41,13 +42,14 @@ def value(v):
 
 
 def contents(path):
-    """{name: attributes and data} of every group and dataset but /provenance and /c_corr's attributes."""
+    """{name: attributes and data} of every group and dataset but /provenance and /c_corr's a, k, source, fitted."""
     out = {}
     with h5py.File(path, "r") as f:
         def visit(name, obj):
             if name.startswith("provenance"):
                 return
-            attrs = {} if name == "c_corr" else {k: value(v) for k, v in obj.attrs.items()}
+            attrs = {k: value(v) for k, v in obj.attrs.items()
+                     if not (name == "c_corr" and k in ("a", "k", "source", "fitted"))}
             out[name] = (attrs, value(obj[()]) if isinstance(obj, h5py.Dataset) else None)
         out["/"] = ({k: value(v) for k, v in f.attrs.items()}, None)
         f.visititems(visit)
@@ -78,7 +80,7 @@ with tempfile.TemporaryDirectory() as tmp:
         c = dict(f["c_corr"].attrs)
     check(p == {**TEXT, "made_by": "cgd-fit a.h5 b.h5 --operator grid"},
           f"the four texts, each on one line ({p})")
-    check(c["a"] == 1.0 and c["k"] == 0.0 and str(c["source"]) == "none", f"c_corr = 1 ({c})")
+    check(c["a"] == 1.0 and c["k"] == 0.0 and str(c["source"]) == "none" and c["fitted"] == 0, f"c_corr = 1 ({c})")
     check(contents(out) == contents(model), "every other attribute and dataset as the input's")
     check(digest(model) == before, "the input untouched")
     with h5py.File(model, "r") as f:
@@ -108,6 +110,15 @@ with tempfile.TemporaryDirectory() as tmp:
     with open(notoml, "w") as f:
         f.write("made_by = \n")
     refused([model, "--provenance", notoml], f"{notoml}: not TOML")
+    latin1 = os.path.join(tmp, "latin1.toml")
+    with open(latin1, "wb") as f:
+        f.write('made_by = "Sundaresan \u00e9"\n'.encode("latin-1"))
+    refused([model, "--provenance", latin1], f"{latin1}: not TOML")
+    fitted = os.path.join(tmp, "fitted.h5")  # a model after cgd-fit --parcel-fit
+    shutil.copyfile(model, fitted)
+    with h5py.File(fitted, "r+") as f:
+        f["c_corr"].attrs["a_fit"], f["c_corr"].attrs["fitted"] = 0.4, 1
+    refused([fitted, "--provenance", prov, "--no-parcel-correction"], "/c_corr was fitted")
     filtered = os.path.join(source, "data", "filtered", "half_phi0.02.h5")
     refused([filtered, "--provenance", prov], "cgd_format is 'filtered'")
     refused([model, "--provenance", prov], "exists (--force to overwrite)", output=out)

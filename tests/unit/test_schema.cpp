@@ -293,6 +293,18 @@ Damage attribute_number(const std::string& object, const std::string& name, doub
   };
 }
 
+/// An attribute replaced by an int64 (an integer outside its allowed values).
+Damage attribute_integer(const std::string& object, const std::string& name, std::int64_t value) {
+  return [=](hid_t f) {
+    H5Adelete_by_name(f, object.c_str(), name.c_str(), H5P_DEFAULT);
+    const hid_t space = H5Screate(H5S_SCALAR);
+    const hid_t attr = H5Acreate_by_name(f, object.c_str(), name.c_str(), H5T_NATIVE_INT64, space, H5P_DEFAULT,
+                                         H5P_DEFAULT, H5P_DEFAULT);
+    EXPECT_GE(H5Awrite(attr, H5T_NATIVE_INT64, &value), 0);
+    H5Aclose(attr), H5Sclose(space);
+  };
+}
+
 /// A float-array attribute replaced by `values` (another count than the schema's).
 Damage removed_attribute_values(const std::string& object, const std::string& name, const std::vector<double>& values) {
   return [=](hid_t f) {
@@ -683,7 +695,8 @@ TEST(DragModelSchema, RefusesDamagedFilesNamingTheFileAndTheKey) {
       {"runs_phi", removed_attribute_values("/c_corr", "runs_phi", {0.05}), "runs_phi", "one per entry of 'runs'"},
       {"k_interval", removed_attribute_values("/c_corr", "k_interval", {0.1, 0.2, 0.3}), "k_interval", "expected 2"},
       {"no_decision", remove_attribute("/c_corr", "decision"), "decision", "lacks"},
-      {"pooled_runs", attribute_number("/sources", "pooled_runs", 2.0), "pooled_runs", ""},
+      {"pooled_runs_float", attribute_number("/sources", "pooled_runs", 1.0), "pooled_runs", ""},
+      {"pooled_runs_two", attribute_integer("/sources", "pooled_runs", 2), "pooled_runs", "expected 0 or 1"},
   };
   expect_refused(good, cases, [](const std::string& p) { cgd::schema::read_drag_model(p); });
 }
