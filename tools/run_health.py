@@ -14,9 +14,14 @@ One row per window of WINDOW t_ref (default 5) with
   * wall s/t_ref  wall seconds per t_ref, and wall ns per particle-step (x RANKS when given: the run's rank
               count, which the series does not record). A run that shared the machine is slower than an
               idle one; the step counts are not.
+With --timers, a second table: where each window's wall time went, in % of it, from the series' timers (rank 0's
+cumulative seconds per phase, docs/schema-run.md): neighbour lists (time_neighbor_s), forces and integration
+(time_force_integrate_s), drag coupling (time_coupling_s), the fluid (predictor, pressure, correction), communication
+(time_comm_s), output (output, checkpoint, diagnostics), and what no timer holds (other).
 
-usage: /usr/bin/python3 tools/run_health.py RUN_DIR_OR_SERIES [--window 5] [--ranks 1] [--markdown]
-Exit status 0; 2 for a file that is not a readable series (the message names the file and what is missing).
+usage: /usr/bin/python3 tools/run_health.py RUN_DIR_OR_SERIES [--window 5] [--ranks 1] [--markdown] [--timers]
+Exit status 0; 2 for a file that is not a readable series (the message names the file and what is missing), or with
+--timers a series without the timers (written before them).
 (Debian's h5py/numpy belong to /usr/bin/python3.)"""
 import argparse
 import math
@@ -29,6 +34,11 @@ import numpy as np
 
 COLUMNS = ["time", "step", "wall_seconds", "neighbor_rebuilds", "contacts_per_particle", "max_overlap_rel",
            "dt_fluid", "pressure_iterations", "slip_velocity", "max_solids_fraction", "floored_cells"]
+# --timers: the share of the wall time per phase (label, the series' cumulative timers it sums)
+TIMERS = [("neighbour", ["time_neighbor_s"]), ("forces+integrate", ["time_force_integrate_s"]),
+          ("coupling", ["time_coupling_s"]),
+          ("fluid", ["time_fluid_predictor_s", "time_fluid_pressure_s", "time_fluid_correction_s"]),
+          ("comm", ["time_comm_s"]), ("output", ["time_output_s", "time_checkpoint_s", "time_diagnostics_s"])]
 
 
 def fail(msg):
@@ -36,13 +46,14 @@ def fail(msg):
     sys.exit(2)
 
 
-def read_series(path):
+def read_series(path, timers=False):
     try:
         f = h5py.File(path, "r")
     except OSError as e:
         fail(f"{path}: not a readable HDF5 file ({e})")
     with f:
-        missing = [c for c in COLUMNS if c not in f]
+        columns = COLUMNS + ([c for _, cs in TIMERS for c in cs] if timers else [])
+        missing = [c for c in columns if c not in f]
         if missing:
             fail(f"{path}: not a run's series: dataset(s) {', '.join('/' + m for m in missing)} missing")
         if "params" not in f:
@@ -51,9 +62,9 @@ def read_series(path):
         for key in ("t_ref_s", "u_t_m_s", "particle_count"):
             if key not in p:
                 fail(f"{path}: /params attribute {key} missing")
-        data = {c: np.asarray(f[c][:], dtype=float) for c in COLUMNS}
+        data = {c: np.asarray(f[c][:], dtype=float) for c in columns}
         n = len(data["time"])
-        for c in COLUMNS:
+        for c in columns:
             if data[c].shape[0] != n:
                 fail(f"{path}: /{c} has {data[c].shape[0]} rows, /time has {n}")
         if data["slip_velocity"].ndim != 2 or data["slip_velocity"].shape[1] != 3:
@@ -101,11 +112,37 @@ def windows(data, t_ref, u_t, n_particles, window, ranks):
             "wall_per_tref": wall / dt_tref if wall > 0 and dt_tref > 0 else math.nan,
             "ns_per_ps": 1e9 * wall * ranks / (n_particles * steps) if wall > 0 and steps > 0 else math.nan,
         })
+        if "time_neighbor_s" in data:  # --timers: % of the window's wall time per phase, the rest "other"
+            shares = {label: 100.0 * sum(data[c][i1] - data[c][i0] for c in cs) / wall if wall > 0 else math.nan
+                      for label, cs in TIMERS}
+            shares["other"] = 100.0 - sum(shares.values())
+            rows[-1]["timers"] = shares
     return rows
 
 
 HEAD = ["t/t_ref", "slip/u_t", "max overlap/d", "contacts/particle", "steps/rebuild", "dt_fluid s",
         "PCG it mean/max", "max phi", "floored", "wall s/t_ref", "wall ns/ps"]
+
+
+TIMER_HEAD = ["t/t_ref"] + [label + " %" for label, _ in TIMERS] + ["other %"]
+
+
+def timer_cells(r):
+    return [f"{r['from']:.0f}-{r['to']:.1f}"] + [f"{r['timers'][label]:.1f}" for label, _ in TIMERS] + \
+        [f"{r['timers']['other']:.1f}"]
+
+
+def print_table(head, table, markdown):
+    if markdown:
+        print("| " + " | ".join(head) + " |")
+        print("|" + "---|" * len(head))
+        for c in table:
+            print("| " + " | ".join(c) + " |")
+    else:
+        w = [max(len(h), *(len(c[k]) for c in table)) if table else len(h) for k, h in enumerate(head)]
+        print("  ".join(h.rjust(w[k]) for k, h in enumerate(head)))
+        for c in table:
+            print("  ".join(x.rjust(w[k]) for k, x in enumerate(c)))
 
 
 def cells(r):
@@ -121,6 +158,7 @@ def main():
     ap.add_argument("--window", type=float, default=5.0, help="t_ref per row (default 5)")
     ap.add_argument("--ranks", type=int, default=1, help="the run's rank count, for ns per particle-step")
     ap.add_argument("--markdown", action="store_true", help="a Markdown table instead of text")
+    ap.add_argument("--timers", action="store_true", help="also the share of the wall time per phase")
     a = ap.parse_args()
     if not a.window > 0:
         fail(f"--window {a.window}: must be > 0 t_ref")
@@ -129,20 +167,13 @@ def main():
     path = os.path.join(a.run, "series.h5") if os.path.isdir(a.run) else a.run
     if not os.path.exists(path):
         fail(f"{path}: no such file")
-    data, t_ref, u_t, n = read_series(path)
+    data, t_ref, u_t, n = read_series(path, a.timers)
     rows = windows(data, t_ref, u_t, n, a.window, a.ranks)
     print(f"{path}: {n:.0f} particles, {data['time'][-1] / t_ref:.2f} t_ref, {int(data['step'][-1])} DEM steps")
-    table = [cells(r) for r in rows]
-    if a.markdown:
-        print("| " + " | ".join(HEAD) + " |")
-        print("|" + "---|" * len(HEAD))
-        for c in table:
-            print("| " + " | ".join(c) + " |")
-    else:
-        w = [max(len(h), *(len(c[k]) for c in table)) if table else len(h) for k, h in enumerate(HEAD)]
-        print("  ".join(h.rjust(w[k]) for k, h in enumerate(HEAD)))
-        for c in table:
-            print("  ".join(x.rjust(w[k]) for k, x in enumerate(c)))
+    print_table(HEAD, [cells(r) for r in rows], a.markdown)
+    if a.timers:
+        print()
+        print_table(TIMER_HEAD, [timer_cells(r) for r in rows], a.markdown)
 
 
 if __name__ == "__main__":
