@@ -78,6 +78,24 @@ FilteredFile pool_runs(const std::vector<FilteredFile>& files, std::uint64_t see
   out.physics = first.physics;
   out.phi_edges = first.phi_edges;
   out.has_per_snapshot = true;
+  // the same series in the same order: group, F and cells across (what differs is named)
+  auto describe = [](const std::vector<WidthSeries>& v) {
+    std::string s;
+    for (const WidthSeries& w : v) {
+      std::ostringstream F;
+      F << w.F;
+      s += (s.empty() ? "" : ", ") + w.group + " (F = " + F.str() + ")";
+    }
+    return s.empty() ? std::string("none") : s;
+  };
+  auto same = [](const std::vector<WidthSeries>& x, const std::vector<WidthSeries>& y) {
+    if (x.size() != y.size()) return false;
+    for (std::size_t i = 0; i < x.size(); ++i)
+      if (x[i].group != y[i].group || std::abs(x[i].F - y[i].F) > 1e-6 * std::abs(y[i].F) ||
+          x[i].cells_across != y[i].cells_across)
+        return false;
+    return true;
+  };
   // the runs one file after the other (run index offset by the runs before), each (run, block) a block of its own
   std::vector<std::int64_t> block_id;  // a global block of every snapshot row
   std::map<std::pair<std::int64_t, std::int64_t>, std::int64_t> ids;
@@ -86,24 +104,6 @@ FilteredFile pool_runs(const std::vector<FilteredFile>& files, std::uint64_t see
     if (!f.has_per_snapshot)
       throw InputError(f.path + ": --pool-runs needs the per-snapshot sums (/width_<k>/per_snapshot); filter the run "
                        "with this cgd-filter");
-    // the same series in the same order: group, F and cells across (what differs is named)
-    auto describe = [](const std::vector<WidthSeries>& v) {
-      std::string s;
-      for (const WidthSeries& w : v) {
-        std::ostringstream F;
-        F << w.F;
-        s += (s.empty() ? "" : ", ") + w.group + " (F = " + F.str() + ")";
-      }
-      return s.empty() ? std::string("none") : s;
-    };
-    auto same = [](const std::vector<WidthSeries>& x, const std::vector<WidthSeries>& y) {
-      if (x.size() != y.size()) return false;
-      for (std::size_t i = 0; i < x.size(); ++i)
-        if (x[i].group != y[i].group || std::abs(x[i].F - y[i].F) > 1e-6 * std::abs(y[i].F) ||
-            x[i].cells_across != y[i].cells_across)
-          return false;
-      return true;
-    };
     for (const auto kind : {&FilteredFile::widths, &FilteredFile::grids})
       if (!same(f.*kind, first.*kind))
         throw InputError(f.path + " and " + first.path + ": --pool-runs pools files of the same widths and grids; " +
@@ -127,6 +127,16 @@ FilteredFile pool_runs(const std::vector<FilteredFile>& files, std::uint64_t see
   std::vector<std::vector<std::int64_t>> blocks_of_run(static_cast<std::size_t>(run_offset));
   for (const auto& [key, id] : ids) blocks_of_run[static_cast<std::size_t>(key.first)].push_back(id);
   const std::size_t n_blocks = ids.size();
+  // the bootstrap's replicates, drawn once: each draws within each run as many of its blocks as it has (the
+  // multiplicity of every block), and the same draws serve every width and grid, as in cgd-filter
+  std::mt19937_64 rng(seed);
+  std::vector<std::vector<double>> mults(static_cast<std::size_t>(replicates), std::vector<double>(n_blocks, 0.0));
+  for (std::vector<double>& mult : mults)
+    for (const auto& blocks : blocks_of_run) {
+      if (blocks.empty()) continue;
+      std::uniform_int_distribution<std::size_t> pick(0, blocks.size() - 1);
+      for (std::size_t j = 0; j < blocks.size(); ++j) mult[static_cast<std::size_t>(blocks[pick(rng)])] += 1.0;
+    }
   // one series: the sums of every file's rows, its totals, its block sums and the bootstrap interval of H
   auto pooled = [&](auto series_of) {
     WidthSeries w = series_of(first);
@@ -159,16 +169,8 @@ FilteredFile pool_runs(const std::vector<FilteredFile>& files, std::uint64_t see
       if (count[b] > 0) w.phi_mean[b] = phi_sum[b] / count[b];
       if (count[b] > 0 && mic[b] != 0.0) w.H[b] = 1.0 - num[b] / mic[b];
     }
-    std::mt19937_64 rng(seed);
     std::vector<std::vector<double>> reps(nb);
-    std::vector<double> mult(n_blocks);
-    for (int r = 0; r < replicates; ++r) {
-      std::fill(mult.begin(), mult.end(), 0.0);
-      for (const auto& blocks : blocks_of_run) {
-        if (blocks.empty()) continue;
-        std::uniform_int_distribution<std::size_t> pick(0, blocks.size() - 1);
-        for (std::size_t j = 0; j < blocks.size(); ++j) mult[static_cast<std::size_t>(blocks[pick(rng)])] += 1.0;
-      }
+    for (const std::vector<double>& mult : mults) {
       for (std::size_t b = 0; b < nb; ++b) {
         double n = 0, m = 0;
         for (std::size_t blk = 0; blk < n_blocks; ++blk)

@@ -67,8 +67,8 @@ FilteredFile read_filtered_file(const std::string& path);
 /// cgd-filter's (`replicates` replicates, each drawing within each run as many of its snapshot blocks as it has, with
 /// replacement; percentile interval; std::mt19937_64 seeded with `seed`); the per-snapshot sums one file after the
 /// other, the runs numbered on. Fitted, each bin's H then weighs the runs by their share of its drag (the pooled
-/// ratio); fitted side by side, each run's H is a point of its own weighted by its interval. path "pooled runs of
-/// <n> files"; pooled_paths, pooled_checksums: the files. The drift sums are not carried (the spline fit does not use
+/// ratio); fitted side by side, each run's H is a point of its own weighted by its interval. path "pooled(A + B + ...)"
+/// of the files' paths; pooled_paths, pooled_checksums: the files. The drift sums are not carried (the spline fit does not use
 /// them; --drift-table pools the files' sums itself). InputError naming the files when one lacks the per-snapshot
 /// sums or the widths and grids differ (group, F, cells across); the physics and bins are check_same_physics'. One
 /// file is returned as it is (its H is the pooled H of its runs already).

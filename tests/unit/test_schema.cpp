@@ -281,28 +281,27 @@ Damage attribute_as_text(const std::string& object, const std::string& name, con
   };
 }
 
-/// A float attribute replaced by another number (NaN, or a value outside its range).
-Damage attribute_number(const std::string& object, const std::string& name, double value) {
+/// The attribute replaced by one scalar of the native type `type` (the value's bytes).
+template <typename T>
+Damage scalar_attribute(const std::string& object, const std::string& name, hid_t type, T value) {
   return [=](hid_t f) {
     H5Adelete_by_name(f, object.c_str(), name.c_str(), H5P_DEFAULT);
     const hid_t space = H5Screate(H5S_SCALAR);
-    const hid_t attr = H5Acreate_by_name(f, object.c_str(), name.c_str(), H5T_NATIVE_DOUBLE, space, H5P_DEFAULT,
-                                         H5P_DEFAULT, H5P_DEFAULT);
-    EXPECT_GE(H5Awrite(attr, H5T_NATIVE_DOUBLE, &value), 0);
+    const hid_t attr = H5Acreate_by_name(f, object.c_str(), name.c_str(), type, space, H5P_DEFAULT, H5P_DEFAULT,
+                                         H5P_DEFAULT);
+    EXPECT_GE(H5Awrite(attr, type, &value), 0);
     H5Aclose(attr), H5Sclose(space);
   };
 }
 
+/// A float attribute replaced by another number (NaN, or a value outside its range).
+Damage attribute_number(const std::string& object, const std::string& name, double value) {
+  return scalar_attribute(object, name, H5T_NATIVE_DOUBLE, value);
+}
+
 /// An attribute replaced by an int64 (an integer outside its allowed values).
 Damage attribute_integer(const std::string& object, const std::string& name, std::int64_t value) {
-  return [=](hid_t f) {
-    H5Adelete_by_name(f, object.c_str(), name.c_str(), H5P_DEFAULT);
-    const hid_t space = H5Screate(H5S_SCALAR);
-    const hid_t attr = H5Acreate_by_name(f, object.c_str(), name.c_str(), H5T_NATIVE_INT64, space, H5P_DEFAULT,
-                                         H5P_DEFAULT, H5P_DEFAULT);
-    EXPECT_GE(H5Awrite(attr, H5T_NATIVE_INT64, &value), 0);
-    H5Aclose(attr), H5Sclose(space);
-  };
+  return scalar_attribute(object, name, H5T_NATIVE_INT64, value);
 }
 
 /// A float-array attribute replaced by `values` (another count than the schema's).
