@@ -67,10 +67,10 @@ TEST(ShippedData, HalfBoxModelIsTheFitOfTheShippedFilteredFiles) {
   o.breakpoints = static_cast<int>(m.diagnostics->breakpoints);
   o.bootstrap = 0;
   o.cross_validate = false;
-  const std::vector<cgd::fit::FilteredFile> fitted =
-      m.sources_pooled ? std::vector<cgd::fit::FilteredFile>{cgd::fit::pool_runs(files, o.seed)} : files;
-  const cgd::fit::FitResult r =
-      cgd::fit::fit_filtered_drag(cgd::fit::select_operator(fitted, o.calibration_operator), o, nullptr);
+  // as cgd-fit: the operator's series selected, then the runs pooled
+  std::vector<cgd::fit::FilteredFile> fitted = cgd::fit::select_operator(files, o.calibration_operator);
+  if (m.sources_pooled) fitted = {cgd::fit::pool_runs(fitted, o.seed)};
+  const cgd::fit::FitResult r = cgd::fit::fit_filtered_drag(fitted, o, nullptr);
   EXPECT_NEAR(r.width_exponent, m.width_exponent, 1e-9);
   const auto same = [](const std::vector<double>& refit, const std::vector<double>& shipped, const char* what) {
     ASSERT_EQ(refit.size(), shipped.size()) << what;
