@@ -41,7 +41,7 @@ MIN_COUNT = 100  # cgd-fit's default --min-count, which --grid-table applies
 # the resolved runs' slip/u_t over 20-50 t_ref from their series.h5 (cgd-coarse --summarise RUN_DIR --from-tref 20),
 # measured when each run ended; a file shipped later adds its run's value here
 SERIES_SLIP = {"half_phi0.02.h5": 1.116, "half_phi0.05.h5": 1.116, "half_phi0.10.h5": 1.099, "half_phi0.20.h5": 0.894,
-               "half_phi0.30.h5": 0.737,
+               "half_phi0.30.h5": 0.737, "half_phi0.40.h5": 0.283,
                "paper_phi0.02.h5": 1.357, "paper_phi0.05.h5": 1.515}
 SLIP_TOLERANCE = 0.005
 

@@ -9,7 +9,12 @@
 //       the comparison would be vacuous (too few points, H not varying, no point below phi_crit);
 //   export_check make-table OUT.h5
 //       a --grid-table model (cgd::fit::write_grid_table_model, what cgd-fit --grid-table runs) of synthetic
-//       filtered data with coarse grids (tests/unit/fit_test_util.hpp).
+//       filtered data with coarse grids (tests/unit/fit_test_util.hpp);
+//   export_check make-shifted MODEL.h5 OUT.h5
+//       MODEL's spline model with 0.1 added to every h coefficient (S_h + 0.1: a B-spline's basis sums to 1), so
+//       that h(phi_crit) > 0 and the linear ramp below phi_crit is exercised whatever the shipped model's
+//       h(phi_crit) is (the six-run model's S_h(phi_crit) = -0.007 is clamped to 0: its ramp is 0); fails (exit 1)
+//       when the shifted h(phi_crit) is not > 0.05.
 // Tolerance: |consumer - engine| <= 1e-12 max(1, |engine|) for h, a, H and beta_bar/beta_micro. The local form is
 // the B-spline's own polynomial on each span (exact in exact arithmetic); the header evaluates it by Horner's
 // rule where the engine runs de Boor's recursion, so the two differ by rounding only (a few ulp, times the
@@ -30,6 +35,7 @@
 
 #include "core/mpi_init.hpp"
 #include "core/filtered_drag.hpp"
+#include "core/schema/drag_model.hpp"
 #include "core/scene.hpp"
 #include "fit/fitter.hpp"
 #include "tests/unit/fit_test_util.hpp"
@@ -68,7 +74,8 @@ struct Engine {
 int usage() {
   std::cerr << "usage: export_check points (--model MODEL.h5 | --radl2014) OUT.txt\n"
                "       export_check compare (--model MODEL.h5 | --radl2014 L_CHAR_M) POINTS [--csv H.csv] LABEL=OUT...\n"
-               "       export_check make-table OUT.h5\n";
+               "       export_check make-table OUT.h5\n"
+               "       export_check make-shifted MODEL.h5 OUT.h5\n";
   return 2;
 }
 
@@ -147,10 +154,16 @@ int compare(const Engine& engine, const std::string& points_path, const std::str
     H_max = std::max(H_max, ref.back().H);
     if (p.phi > 0 && p.phi < phi_crit && ref.back().H != 0) ++low_phi_nonzero;
   }
-  // not vacuous: many points, H varies, the low-phi end carries a correction (splines, Radl) or is the table's
+  // not vacuous: many points, H varies, the low-phi end carries a correction (splines, Radl) or is the table's;
+  // a spline model whose h(phi_crit) is 0 (clamped) has a ramp of 0 below phi_crit: make-shifted's model covers it
   if (pts.size() < 5000) fail("only " + std::to_string(pts.size()) + " points in " + points_path);
   if (!(H_max - H_min > 0.1)) fail("H varies by less than 0.1 over the points: a comparison of nothing");
-  if (low_phi_nonzero < 10) fail("fewer than 10 points with 0 < phi < phi_crit and H != 0");
+  const bool zero_ramp = engine.model && !engine.model->table && !engine.model->drift &&
+                         cgd::SplineCurves{engine.model.get()}.h(phi_crit) == 0.0;
+  if (zero_ramp)
+    std::cout << "note h(phi_crit) = 0: the ramp below phi_crit is 0 here (exercised by the shifted model)\n";
+  else if (low_phi_nonzero < 10)
+    fail("fewer than 10 points with 0 < phi < phi_crit and H != 0");
   for (const std::string& spec : outputs) {
     const auto eq = spec.find('=');
     const std::string label = spec.substr(0, eq), path = spec.substr(eq + 1);
@@ -251,6 +264,18 @@ int make_table(const std::string& out_path) {
   return 0;
 }
 
+int make_shifted(const std::string& in_path, const std::string& out_path) {
+  cgd::schema::DragModelFile m = cgd::schema::read_drag_model(in_path);
+  for (double& c : m.h.coefficients) c += 0.1;
+  const char* src = std::getenv("CGD_SOURCE_DIR");
+  cgd::schema::write_drag_model(out_path, cgd::load_scene(std::string(src ? src : ".") + "/tests/scenes/demo_box.toml"),
+                                m);
+  const cgd::DragModel shifted = cgd::load_drag_model(out_path);
+  const double h = cgd::SplineCurves{&shifted}.h(shifted.phi_crit);
+  std::cout << "shifted model: h(phi_crit) = " << h << "\n";
+  return h > 0.05 ? 0 : 1;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -260,6 +285,8 @@ int main(int argc, char** argv) {
     std::vector<std::string> a(argv + 1, argv + argc);
     if (a.size() >= 2 && a[0] == "make-table") {
       status = make_table(a[1]);
+    } else if (a.size() >= 3 && a[0] == "make-shifted") {
+      status = make_shifted(a[1], a[2]);
     } else if (a.size() >= 3 && (a[0] == "points" || a[0] == "compare")) {
       std::size_t i = 1;
       Engine engine;

@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # The exported evaluator as other codes use it (docs/export.md "Tests"; CTest label export):
-#   export_test.sh write      cgd-export the shipped data/models/half_box.h5, a --grid-table model and Radl 2014
-#                             (at the Table 1 scene's L_char) with --name model into WORK/<model>/, the points to
+#   export_test.sh write      cgd-export the shipped data/models/half_box.h5, the same with h + 0.1 (its ramp below
+#                             phi_crit not 0), a --grid-table model and Radl 2014 (at the Table 1 scene's L_char) with --name model into WORK/<model>/, the points to
 #                             evaluate, and the H CSV against the engine (fixture of the tests below)
 #   export_test.sh c|cxx|fortran
 #                             compile the header as C99 (-pedantic and more warnings as errors; with clang too where
@@ -20,13 +20,14 @@ here=$source_dir/tests/export
 check=${CGD_EXPORT_CHECK:-$binary_dir/tests/export/export_check}
 export_tool=$binary_dir/cgd-export
 work=$binary_dir/tests/export/work
-models=(half_box table radl2014)
+models=(half_box shifted table radl2014)
 failures=0
 fail() { echo "FAIL $*"; failures=$((failures + 1)); }
 ok() { echo "ok   $*"; }
 spec() {  # the engine's model argument of export_check for a model
   case $1 in
     half_box) echo "--model $source_dir/data/models/half_box.h5" ;;
+    shifted) echo "--model $work/shifted.h5" ;;
     table) echo "--model $work/table.h5" ;;
     radl2014) echo "--radl2014 $(cat "$work/radl2014/l_char_m")" ;;
   esac
@@ -41,6 +42,11 @@ write)
   "$check" make-table "$work/table.h5" >"$work/table.log" 2>&1 || { cat "$work/table.log"; fail "make-table"; exit 1; }
   "$export_tool" "$source_dir/data/models/half_box.h5" --name model -o "$work/half_box" >"$work/half_box.log" 2>&1 ||
     fail "cgd-export half_box.h5: $(cat "$work/half_box.log")"
+  # the shipped model's h with 0.1 added: its ramp below phi_crit is not 0 whatever the shipped model's h(phi_crit)
+  "$check" make-shifted "$source_dir/data/models/half_box.h5" "$work/shifted.h5" >"$work/shifted.log" 2>&1 ||
+    { cat "$work/shifted.log"; fail "make-shifted"; exit 1; }
+  "$export_tool" "$work/shifted.h5" --name model -o "$work/shifted" >"$work/shifted_export.log" 2>&1 ||
+    fail "cgd-export shifted.h5: $(cat "$work/shifted_export.log")"
   "$export_tool" "$work/table.h5" --name model -o "$work/table" >"$work/table_export.log" 2>&1 ||
     fail "cgd-export table.h5: $(cat "$work/table_export.log")"
   "$export_tool" --radl2014 --scene "$source_dir/data/scenes/table1_phi005.toml" --name model -o "$work/radl2014" \
