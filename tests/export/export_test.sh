@@ -15,6 +15,7 @@
 set -u
 mode=${1:?usage: export_test.sh write|c|cxx|fortran|perturb|bad_input}
 source_dir=${CGD_SOURCE_DIR:-$(cd "$(dirname "$0")/../.." && pwd)}
+export CGD_SOURCE_DIR=$source_dir  # export_check make-shifted reads a scene from it
 binary_dir=${CGD_BINARY_DIR:-$source_dir/build}
 here=$source_dir/tests/export
 check=${CGD_EXPORT_CHECK:-$binary_dir/tests/export/export_check}

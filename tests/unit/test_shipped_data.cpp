@@ -90,14 +90,16 @@ namespace {
 // (13.25 d_p cells; docs/coarse.md), H_grid pooled over the shipped runs (the ratio of the sums over every run, what
 // the fit of the pooled runs is fitted to, with its 95 % block-bootstrap band), against H = h/(1 + a F^n) at the
 // grid's F, in the bins of >= 1e5 samples at phi-bar >= 2 phi_crit (below, h -> 0 linearly and a is capped by
-// identifiability: docs/fit.md "Low phi"; the pooled H at phi-bar 0.024 is 0.23, the six-run model's 0.12).
+// identifiability: docs/fit.md "Low phi"; the pooled H at phi-bar 0.024 is 0.23, the six-run model's 0.14).
 // Tolerance: the band's half-width + 0.03, what the splines' smoothing across the bins leaves between the model and
 // the data it was fitted to (measured on the five runs pooled: up to 0.020 at phi-bar 0.05-0.49, 0.032 at 0.035).
-// The band is 0.01-0.05 up to phi-bar 0.45 and widens to 0.06-0.3 near packing. Near packing the six runs measure
-// H < 0 (more drag than the micro law at the cell's mean phi: -0.067 +- 0.062 at phi-bar 0.555, -0.114 +- 0.096 at
-// 0.574), which the form cannot follow (h >= 0, so H >= 0; docs/fit.md "The six-run model"): in a bin whose whole
-// band lies below 0 the model is held to the form's best, H = 0, within the same tolerance, and such bins are
-// counted (two in the six runs; a model that strays from 0 there, or more such bins, fails).
+// The band is 0.01-0.05 up to phi-bar 0.45 and 0.06-0.4 up to 0.59; a bin whose band is wider than 0.5 (one,
+// at 0.594: +-1.2) cannot test anything and is counted, not checked. Near packing the six runs measure H < 0
+// (more drag than the micro law at the cell's mean phi) in three bins whose whole band lies below 0: -0.067 +-
+// 0.062 at phi-bar 0.555, -0.114 +- 0.096 at 0.574, -0.226 [-0.54, -0.05] at 0.583. The form cannot follow them
+// (h >= 0, so H >= 0; docs/fit.md "The six-run model"): there, at phi-bar >= 0.5 only, the model is asked to come
+// as close as the form allows, H <= 0.03 (the same 0.03 of smoothing above the form's best, H = 0), and the number
+// of such bins is pinned (a change of the data, of the pooling or of the bootstrap shows).
 TEST(ShippedData, HalfBoxModelReproducesTheRunsGridH) {
   const cgd::schema::DragModelFile file = cgd::schema::read_drag_model(model_path());
   const std::vector<cgd::fit::FilteredFile> files = shipped_sources(file);
@@ -110,19 +112,28 @@ TEST(ShippedData, HalfBoxModelReproducesTheRunsGridH) {
   const cgd::DragModel m = cgd::load_drag_model(model_path());
   const cgd::SplineCurves curves{&m};
   const double Fn = std::pow(grid->F, m.width_exponent);
-  int checked = 0, below_zero = 0;
+  int checked = 0, below_zero = 0, too_wide = 0;
   for (std::size_t b = 0; b < pooled.bins(); ++b) {
     const double phi = grid->phi_mean[b], H = grid->H[b];
     const double band = 0.5 * (grid->H_high[b] - grid->H_low[b]);
     const double model = curves.h(phi) / (1.0 + curves.a(phi) * Fn);
     if (grid->count[b] < 100000 || phi < 2 * m.phi_crit) continue;
+    if (band > 0.5) {
+      ++too_wide;
+      continue;
+    }
     ++checked;
-    const bool negative = grid->H_high[b] < 0.0;  // H < 0 established: the form's best is H = 0
-    below_zero += negative;
-    EXPECT_NEAR(model, negative ? 0.0 : H, band + 0.03)
-        << "phi-bar " << phi << " (" << grid->count[b] << " samples, H_grid " << H << " +- " << band << ")";
+    const std::string where = "phi-bar " + std::to_string(phi) + " (" + std::to_string(grid->count[b]) +
+                              " samples, H_grid " + std::to_string(H) + " +- " + std::to_string(band) + ")";
+    if (phi >= 0.5 && grid->H_high[b] < 0.0) {  // H < 0 established near packing: the form's best is H = 0
+      ++below_zero;
+      EXPECT_LE(model, 0.03) << where;
+      continue;
+    }
+    EXPECT_NEAR(model, H, band + 0.03) << where;
   }
-  EXPECT_LE(below_zero, 3) << "bins whose H_grid band lies below 0";
+  EXPECT_EQ(below_zero, 3) << "bins near packing whose H_grid band lies below 0 (0.555, 0.574, 0.583)";
+  EXPECT_LE(too_wide, 1) << "bins whose band is wider than 0.5";
   EXPECT_GE(checked, 40);
 }
 
