@@ -241,6 +241,12 @@ int compare(const Engine& engine, const std::string& points_path, const std::str
   return failures ? 1 : 0;
 }
 
+/// The scene a written model's common attributes come from (the models here are compared, not run).
+cgd::Scene test_scene() {
+  const char* src = std::getenv("CGD_SOURCE_DIR");
+  return cgd::load_scene(std::string(src ? src : ".") + "/tests/scenes/demo_box.toml");
+}
+
 int make_table(const std::string& out_path) {
   using namespace cgd::fit::testing;
   SyntheticSpec s;
@@ -258,18 +264,15 @@ int make_table(const std::string& out_path) {
     f.grids.push_back(g);
     ++k;
   }
-  const char* src = std::getenv("CGD_SOURCE_DIR");
-  const cgd::Scene scene = cgd::load_scene(std::string(src ? src : ".") + "/tests/scenes/demo_box.toml");
-  std::cout << cgd::fit::write_grid_table_model(out_path, {f}, static_cast<int>(f.grids[2].cells_across), 100, scene);
+  std::cout << cgd::fit::write_grid_table_model(out_path, {f}, static_cast<int>(f.grids[2].cells_across), 100,
+                                                test_scene());
   return 0;
 }
 
 int make_shifted(const std::string& in_path, const std::string& out_path) {
   cgd::schema::DragModelFile m = cgd::schema::read_drag_model(in_path);
   for (double& c : m.h.coefficients) c += 0.1;
-  const char* src = std::getenv("CGD_SOURCE_DIR");
-  cgd::schema::write_drag_model(out_path, cgd::load_scene(std::string(src ? src : ".") + "/tests/scenes/demo_box.toml"),
-                                m);
+  cgd::schema::write_drag_model(out_path, test_scene(), m);
   const cgd::DragModel shifted = cgd::load_drag_model(out_path);
   const double h = cgd::SplineCurves{&shifted}.h(shifted.phi_crit);
   std::cout << "shifted model: h(phi_crit) = " << h << "\n";

@@ -1,8 +1,9 @@
 #!/usr/bin/env bash
 # The exported evaluator as other codes use it (docs/export.md "Tests"; CTest label export):
 #   export_test.sh write      cgd-export the shipped data/models/half_box.h5, the same with h + 0.1 (its ramp below
-#                             phi_crit not 0), a --grid-table model and Radl 2014 (at the Table 1 scene's L_char) with --name model into WORK/<model>/, the points to
-#                             evaluate, and the H CSV against the engine (fixture of the tests below)
+#                             phi_crit not 0), a --grid-table model and Radl 2014 (at the Table 1 scene's L_char)
+#                             with --name model into WORK/<model>/, the points to evaluate, and the H CSV against
+#                             the engine (fixture of the tests below)
 #   export_test.sh c|cxx|fortran
 #                             compile the header as C99 (-pedantic and more warnings as errors; with clang too where
 #                             it is installed), as C++17 and C++20, or call it from Fortran

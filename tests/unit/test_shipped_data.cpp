@@ -7,6 +7,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <cstdlib>
 #include <string>
 #include <vector>
@@ -82,10 +83,6 @@ TEST(ShippedData, HalfBoxModelIsTheFitOfTheShippedFilteredFiles) {
   same(r.model.log_a_spline.coefficients, m.log_a.coefficients, "log a coefficients");
 }
 
-}  // namespace
-
-namespace {
-
 // The model reproduces the H the runs measured on the grid it was validated on: the 4-cell grid of the half box
 // (13.25 d_p cells; docs/coarse.md), H_grid pooled over the shipped runs (the ratio of the sums over every run, what
 // the fit of the pooled runs is fitted to, with its 95 % block-bootstrap band), against H = h/(1 + a F^n) at the
@@ -104,7 +101,9 @@ TEST(ShippedData, HalfBoxModelReproducesTheRunsGridH) {
   const cgd::schema::DragModelFile file = cgd::schema::read_drag_model(model_path());
   const std::vector<cgd::fit::FilteredFile> files = shipped_sources(file);
   if (::testing::Test::HasFailure()) return;
-  const cgd::fit::FilteredFile pooled = cgd::fit::pool_runs(files, 1);
+  ASSERT_TRUE(file.bands) << "the shipped model has its /bands";
+  // pooled as the fit pooled them: the bootstrap seed the model records
+  const cgd::fit::FilteredFile pooled = cgd::fit::pool_runs(files, static_cast<std::uint64_t>(file.bands->seed));
   const cgd::fit::WidthSeries* grid = nullptr;
   for (const cgd::fit::WidthSeries& g : pooled.grids)
     if (g.cells_across == 4) grid = &g;
