@@ -1,9 +1,11 @@
 #!/usr/bin/python3
 """The closure experiments' table (scripts/closure_wide_filter.sh, scripts/closure_drift.sh; docs/closure.md).
 
-usage: tools/closure_wide_table.py DIR [--plot PNG] [--rms-alphas LIST]
+usage: tools/closure_wide_table.py DIR [--plot PNG] [--rms-alphas LIST] [--wide]
   --rms-alphas LIST: the per-closure rms and worst over these α only (e.g. 3,4,6,8: the paper's Figure 3 claim
     leaves α = 2 out); the table lists every α
+  --wide: the table with a row per phi and alpha and a column per closure ("mean ± se (seeds)", in %), and after the
+    rms and worst per closure the same per closure and phi (where a closure misses, and by how much)
   --plot PNG: also the picture (the paper's Figure 3 as errors): per phi a panel, the error of the slip against alpha
   per closure (mean over the seeds +- its standard error), the resolved run's own +- standard error shaded.
 
@@ -100,8 +102,13 @@ def plot(path, refs, ref_err, table):
     phis = sorted({k[0] for k in table}, key=float)
     # one colour per closure in every panel (the closures differ between panels when some were not run at a phi)
     colour = {c: f"C{i % 10}" for i, c in enumerate(sorted({k[1] for k in table}, key=closure_order))}
-    fig, axes = plt.subplots(1, len(phis), figsize=(5.2 * len(phis), 4.0), squeeze=False)
-    for ax, phi in zip(axes[0], phis):
+    # at most three panels a row (six <phi> in two rows)
+    cols = min(3, len(phis))
+    rows = (len(phis) + cols - 1) // cols
+    fig, axes = plt.subplots(rows, cols, figsize=(5.2 * cols, 4.0 * rows), squeeze=False)
+    for ax in axes.flat[len(phis):]:
+        ax.set_visible(False)
+    for ax, phi in zip(axes.flat, phis):
         band = 100 * ref_err[phi] / refs[phi]
         ax.axhspan(-band, band, color="0.85", lw=0, label="resolved ± its standard error")
         ax.axhline(0, color="0.4", lw=0.8)
@@ -131,6 +138,7 @@ def main(argv):
     ap.add_argument("dir", help="the directory of resolved_phi<phi>.h5 and the coarse runs")
     ap.add_argument("--plot", metavar="PNG", help="also the picture")
     ap.add_argument("--rms-alphas", type=alpha_list, metavar="LIST", help="the rms and worst over these alphas only")
+    ap.add_argument("--wide", action="store_true", help="a row per phi and alpha, a column per closure")
     args = ap.parse_args(argv[1:])  # exit 2 with argparse's message on bad arguments
     plot_path, rms_alphas, d = args.plot, args.rms_alphas, args.dir
     ref_err = {}
@@ -150,9 +158,7 @@ def main(argv):
     if not runs:
         print(f"closure_wide_table.py: no finished runs in {d}", file=sys.stderr)
         return 1
-    print("| ⟨φ⟩ | resolved slip/u_t | closure | α | error of the slip | seeds |")
-    print("|---|---|---|---|---|---|")
-    per_closure = {}
+    per_closure = {}  # closure -> [(phi, mean)] over the rms alphas
     table = {}
     for (phi, c, alpha) in sorted(runs, key=lambda k: (float(k[0]), closure_order(k[1]), k[2])):
         e = [x[0] for x in runs[(phi, c, alpha)]]
@@ -160,18 +166,43 @@ def main(argv):
         mean = sum(e) / n
         se = (math.sqrt(sum((x - mean) ** 2 for x in e) / (n - 1)) / math.sqrt(n)) if n > 1 else runs[(phi, c, alpha)][0][1]
         if rms_alphas is None or alpha in rms_alphas:
-            per_closure.setdefault(c, []).append(mean)
+            per_closure.setdefault(c, []).append((phi, mean))
         table[(phi, c, alpha)] = (mean, se, n)
-        print(f"| {phi} | {refs[phi]:.3f} | {closure_label(c)} | {alpha} | {100 * mean:+.1f} ± {100 * se:.1f} % | {n} |")
+    closures = sorted(per_closure.keys() | {k[1] for k in table}, key=closure_order)
+    if args.wide:
+        print("| ⟨φ⟩ | resolved slip/u_t | α | " + " | ".join(closure_label(c) for c in closures) + " |")
+        print("|---|---|---|" + "---|" * len(closures))
+        for phi, alpha in sorted({(k[0], k[2]) for k in table}, key=lambda k: (float(k[0]), k[1])):
+            cells = [f"{100 * table[(phi, c, alpha)][0]:+.1f} ± {100 * table[(phi, c, alpha)][1]:.1f} ({table[(phi, c, alpha)][2]})"
+                     if (phi, c, alpha) in table else "" for c in closures]
+            print(f"| {phi} | {refs[phi]:.3f} | {alpha} | " + " | ".join(cells) + " |")
+    else:
+        print("| ⟨φ⟩ | resolved slip/u_t | closure | α | error of the slip | seeds |")
+        print("|---|---|---|---|---|---|")
+        for (phi, c, alpha), (mean, se, n) in table.items():
+            print(f"| {phi} | {refs[phi]:.3f} | {closure_label(c)} | {alpha} | {100 * mean:+.1f} ± {100 * se:.1f} % | {n} |")
     print()
     over = "" if rms_alphas is None else f", α = {','.join(str(a) for a in sorted(rms_alphas))}"
+
+    def rms_worst(m):
+        return 100 * math.sqrt(sum(x * x for x in m) / len(m)), 100 * max(m, key=abs)
+
     print(f"| closure | rms of the means{over} | worst | configurations |")
     print("|---|---|---|---|")
     for c in sorted(per_closure, key=closure_order):
-        m = per_closure[c]
-        rms = math.sqrt(sum(x * x for x in m) / len(m))
-        worst = max(m, key=abs)
-        print(f"| {closure_label(c)} | {100 * rms:.1f} % | {100 * worst:+.1f} % | {len(m)} |")
+        rms, worst = rms_worst([x for _, x in per_closure[c]])
+        print(f"| {closure_label(c)} | {rms:.1f} % | {worst:+.1f} % | {len(per_closure[c])} |")
+    if args.wide:
+        phis = sorted({p for c in per_closure for p, _ in per_closure[c]}, key=float)
+        print()
+        print(f"| closure: rms / worst of the means{over}, per ⟨φ⟩ | " + " | ".join(phis) + " |")
+        print("|---|" + "---|" * len(phis))
+        for c in sorted(per_closure, key=closure_order):
+            cells = []
+            for phi in phis:
+                m = [x for p, x in per_closure[c] if p == phi]
+                cells.append("%.1f / %+.1f %%" % rms_worst(m) if m else "")
+            print(f"| {closure_label(c)} | " + " | ".join(cells) + " |")
     if plot_path:
         plot(plot_path, refs, ref_err, table)
     return 0

@@ -68,6 +68,22 @@ with tempfile.TemporaryDirectory() as d:
           "without --rms-alphas: g4's rms over alpha = 2 and 3 (sqrt((20^2 + 8^2)/2) = 15.2 %)")
     p = subprocess.run([sys.executable, tool, d, "--rms-alphas", "3;4"], capture_output=True, text=True)
     check(p.returncode == 2 and "not a comma-separated list" in p.stderr, "--rms-alphas with a bad list: exit 2 with its message")
+    # --wide: a row per phi and alpha, a column per closure; then the rms and worst per closure and phi
+    p = subprocess.run([sys.executable, tool, d, "--wide", "--rms-alphas", "3"], capture_output=True, text=True)
+    out = p.stdout
+    header = next((l for l in out.splitlines() if l.startswith("| ⟨φ⟩ | resolved slip/u_t | α |")), "")
+    cols = [c.strip() for c in header.strip("|").split("|")]
+    check(p.returncode == 0 and "perfect table of the 4-cell grid" in cols and "drift table, held out" in cols,
+          f"--wide: a column per closure ({p.stderr.strip()})")
+    row3 = next((l for l in out.splitlines() if l.startswith("| 0.05 | 1.000 | 3 |")), "")
+    row2 = next((l for l in out.splitlines() if l.startswith("| 0.05 | 1.000 | 2 |")), "")
+    cell = lambda row, c: [x.strip() for x in row.strip("|").split("|")][cols.index(c)] if c in cols and row else None
+    check(cell(row3, "perfect table of the 4-cell grid") == "-8.0 ± 1.2 (3)", "--wide: g4 at alpha 3, mean ± se (seeds)")
+    check(cell(row3, "model, r = 2") == "+5.0 ± 2.0 (1)", "--wide: r2 at alpha 3, one seed, its own error")
+    check(cell(row2, "perfect table of the 4-cell grid") == "-20.0 ± 1.0 (1)" and cell(row2, "model, r = 2") == "",
+          "--wide: the alpha = 2 row has g4 and an empty cell for r2, which has no alpha = 2 run")
+    check("| perfect table of the 4-cell grid | 8.0 / -8.0 % |" in out,
+          "--wide --rms-alphas 3: g4's rms / worst at 0.05 over alpha = 3 (the alpha = 2 run left out)")
     png = os.path.join(d, "figure.png")
     p = subprocess.run([sys.executable, tool, d, "--plot", png], capture_output=True, text=True)
     check(p.returncode == 0 and os.path.getsize(png) > 0, f"--plot writes the picture ({p.stderr.strip()})")
