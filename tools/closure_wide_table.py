@@ -1,9 +1,10 @@
 #!/usr/bin/python3
 """The closure experiments' table (scripts/closure_wide_filter.sh, scripts/closure_drift.sh; docs/closure.md).
 
-usage: tools/closure_wide_table.py DIR [--plot PNG] [--rms-alphas LIST] [--wide]
+usage: tools/closure_wide_table.py DIR [--plot PNG] [--rms-alphas LIST] [--rms-phis LIST] [--wide]
   --rms-alphas LIST: the per-closure rms and worst over these α only (e.g. 3,4,6,8: the paper's Figure 3 claim
     leaves α = 2 out); the table lists every α
+  --rms-phis LIST: the same over these ⟨φ⟩ only (e.g. 0.02,0.05: the dilute end); the table lists every ⟨φ⟩
   --wide: the table with a row per phi and alpha and a column per closure ("mean ± se (seeds)", in %), and after the
     rms and worst per closure the same per closure and phi (where a closure misses, and by how much)
   --plot PNG: also the picture (the paper's Figure 3 as errors): per phi a panel, the error of the slip against alpha
@@ -17,7 +18,7 @@ Delta = r cells, e.g. radlr2) or <table|drift><held|own><G> (the table of the gr
 tableheld4, as CELLS=8 TABLE_CELLS=4 scripts/closure_drift.sh uses it). Prints a markdown table: per phi, closure and
 alpha, the relative error of the slip against the resolved run, mean over the seeds +- the standard error of that
 mean (the seeds' scatter / sqrt(n); one seed: the run's own batch-means error), and the seeds' count; then per
-closure the rms and the worst of the means over every phi and alpha (with --rms-alphas: over those alphas only).
+closure the rms and the worst of the means over every phi and alpha (with --rms-alphas, --rms-phis: over those only).
 """
 import argparse
 import glob
@@ -133,11 +134,20 @@ def alpha_list(text):
         raise argparse.ArgumentTypeError(f"{text!r} is not a comma-separated list of integers")
 
 
+def phi_list(text):
+    """--rms-phis: a comma-separated list of numbers -> their set (as floats: 0.1 and 0.10 are one phi)."""
+    try:
+        return {float(p) for p in text.split(",")}
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a comma-separated list of numbers")
+
+
 def main(argv):
     ap = argparse.ArgumentParser(prog="closure_wide_table.py", description=__doc__.split("\n")[0])
     ap.add_argument("dir", help="the directory of resolved_phi<phi>.h5 and the coarse runs")
     ap.add_argument("--plot", metavar="PNG", help="also the picture")
     ap.add_argument("--rms-alphas", type=alpha_list, metavar="LIST", help="the rms and worst over these alphas only")
+    ap.add_argument("--rms-phis", type=phi_list, metavar="LIST", help="the rms and worst over these phis only")
     ap.add_argument("--wide", action="store_true", help="a row per phi and alpha, a column per closure")
     args = ap.parse_args(argv[1:])  # exit 2 with argparse's message on bad arguments
     plot_path, rms_alphas, d = args.plot, args.rms_alphas, args.dir
@@ -165,7 +175,7 @@ def main(argv):
         n = len(e)
         mean = sum(e) / n
         se = (math.sqrt(sum((x - mean) ** 2 for x in e) / (n - 1)) / math.sqrt(n)) if n > 1 else runs[(phi, c, alpha)][0][1]
-        if rms_alphas is None or alpha in rms_alphas:
+        if (rms_alphas is None or alpha in rms_alphas) and (args.rms_phis is None or float(phi) in args.rms_phis):
             per_closure.setdefault(c, []).append((phi, mean))
         table[(phi, c, alpha)] = (mean, se, n)
     closures = sorted(per_closure.keys() | {k[1] for k in table}, key=closure_order)
@@ -183,6 +193,8 @@ def main(argv):
             print(f"| {phi} | {refs[phi]:.3f} | {closure_label(c)} | {alpha} | {100 * mean:+.1f} ± {100 * se:.1f} % | {n} |")
     print()
     over = "" if rms_alphas is None else f", α = {','.join(str(a) for a in sorted(rms_alphas))}"
+    if args.rms_phis is not None:
+        over += f", ⟨φ⟩ = {','.join(f'{p:g}' for p in sorted(args.rms_phis))}"
 
     def rms_worst(m):
         return 100 * math.sqrt(sum(x * x for x in m) / len(m)), 100 * max(m, key=abs)

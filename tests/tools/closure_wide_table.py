@@ -84,6 +84,19 @@ with tempfile.TemporaryDirectory() as d:
           "--wide: the alpha = 2 row has g4 and an empty cell for r2, which has no alpha = 2 run")
     check("| perfect table of the 4-cell grid | 8.0 / -8.0 % |" in out,
           "--wide --rms-alphas 3: g4's rms / worst at 0.05 over alpha = 3 (the alpha = 2 run left out)")
+    # --rms-phis: the rms over the listed phis only (a run at 0.02, error +30 %, listed but not in the rms)
+    summary(os.path.join(d, "resolved_phi0.02.h5"), 1.00, 0.01)
+    summary(os.path.join(d, "phi0.02_a3_g4_s1", "summary.h5"), 1.30, 0.01)
+    p = subprocess.run([sys.executable, tool, d, "--rms-alphas", "3", "--rms-phis", "0.050"], capture_output=True, text=True)
+    check(p.returncode == 0 and "| 0.02 | 1.000 | perfect table of the 4-cell grid | 3 | +30.0 ± 1.0 % | 1 |" in p.stdout,
+          "--rms-phis: every phi is still listed")
+    check("| perfect table of the 4-cell grid | 8.0 % | -8.0 % | 1 |" in p.stdout and "⟨φ⟩ = 0.05" in p.stdout,
+          "--rms-phis 0.050: g4's rms over phi = 0.05 alone (8.0 %; 0.050 and 0.05 are one phi)")
+    p = subprocess.run([sys.executable, tool, d, "--rms-alphas", "3"], capture_output=True, text=True)
+    check("| perfect table of the 4-cell grid | 22.0 % | +30.0 % | 2 |" in p.stdout,
+          "without --rms-phis: g4's rms over both phis (sqrt((30^2 + 8^2)/2) = 22.0 %)")
+    p = subprocess.run([sys.executable, tool, d, "--rms-phis", "0.05;0.1"], capture_output=True, text=True)
+    check(p.returncode == 2 and "not a comma-separated list" in p.stderr, "--rms-phis with a bad list: exit 2 with its message")
     png = os.path.join(d, "figure.png")
     p = subprocess.run([sys.executable, tool, d, "--plot", png], capture_output=True, text=True)
     check(p.returncode == 0 and os.path.getsize(png) > 0, f"--plot writes the picture ({p.stderr.strip()})")
