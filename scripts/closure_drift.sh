@@ -16,7 +16,8 @@
 #   OUT: a `Makefile.pipeline PROFILE=half` output directory whose OUT/generate/<run>/DONE exist for every phi of
 #        PHIS. Every finished resolved run of OUT/generate (phi<phi> and phi<phi>_s<seed>) is filtered and pooled:
 #        a held-out table for phi leaves out every run at that phi (all its seeds).
-# Results go to OUT/closure_drift (DIR). A coarse run whose summary.h5 exists is not run again; a filtered file or
+# Results go to OUT/closure_drift (DIR). A coarse run whose summary.h5 exists is not run again (one killed before its
+# end is continued from its checkpoint, scripts/coarse_run.sh); a filtered file or
 # table that exists is kept (delete it to make it again).
 # Environment: BUILD (default build), NICE (default 0), CELLS (default 4), DRIFT_FILTER_ARGS (more cgd-filter
 # options, e.g. the slip bins), OWN_DEPOSIT (default true; false: every coarse run's drag leaves the parcel's own

@@ -17,7 +17,8 @@
 #      runs' gamma* = 1e-3 and t*)
 #   4. the table (tools/closure_wide_table.py): slip error against the resolved run (its 20-50 t_ref slip) per
 #      configuration, mean over the seeds +- their standard error -> OUT/closure_wide/table.md
-# A configuration whose summary.h5 exists is not run again (delete its directory to rerun it).
+# A configuration whose summary.h5 exists is not run again (delete its directory to rerun it); one killed before its
+# end is continued from its checkpoint (scripts/coarse_run.sh).
 # Environment: BUILD (default build), NICE (default 0: a niceness for the coarse runs).
 #   HELDOUT=PHI,PHI,... (e.g. 0.02,0.05,0.10; default empty): the held-out test instead. Everything goes to
 #   OUT/closure_heldout; the model runs of each phi of PHIS use a model fitted WITHOUT that phi's run: cgd-filter

@@ -3,12 +3,20 @@
 # coarse_run RUN PHI ALPHA SEED [cgd-coarse options...]: cgd-coarse of $repo/$base_scene with the caller's array
 # $coarse_sets (its --set options, given first), then that solids fraction, seed and parcel size on cells of $dx d_p,
 # then the options; niceness $nice_level, through the launcher array $launcher (empty: one rank) -> RUN (log RUN.log).
-# A run whose summary.h5 exists is kept; a failed run is reported through the caller's say() and left out (status 0),
-# so that one failure does not stop the matrix.
+# A run whose summary.h5 exists is kept; one killed before its end (its checkpoint.h5 there, no summary.h5) is
+# continued from its checkpoint (cgd-coarse --restart, the scene it was started with), and started again only when
+# that restart fails; a failed run is reported through the caller's say() and left out (status 0), so that one
+# failure does not stop the matrix.
 coarse_run() {
   local run=$1 phi=$2 alpha=$3 seed=$4
   shift 4
   [ -f "$run/summary.h5" ] && return 0
+  if [ -f "$run/checkpoint.h5" ]; then
+    say "$(basename "$run") (continued from its checkpoint)"
+    nice -n "$nice_level" "${launcher[@]}" "$build/cgd-coarse" --restart --quiet -o "$run" >> "$run.log" 2>&1 &&
+      return 0
+    say "$(basename "$run"): the restart failed (log $run.log); run again from the start"
+  fi
   rm -rf "$run"
   say "$(basename "$run")"
   nice -n "$nice_level" "${launcher[@]}" "$build/cgd-coarse" "$repo/$base_scene" --quiet "${coarse_sets[@]}" \

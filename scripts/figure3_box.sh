@@ -36,7 +36,8 @@
 # COARSE_SET; alpha = 1 runs, as noisy as the resolved ones, may take the resolved runs' 20-50) with the
 # profile's COARSE_SET and PHI_SET_<phi> (the box, gamma* and t* of the resolved runs), then the
 # table of the slip error against each resolved run (tools/closure_wide_table.py) -> OUT/figure3_c<CELLS>/table.md.
-# A coarse run whose summary.h5 exists is not run again; a filtered file or table that exists is kept.
+# A coarse run whose summary.h5 exists is not run again, one killed before its end is continued from its checkpoint
+# (scripts/coarse_run.sh); a filtered file or table that exists is kept.
 # Environment: PROFILE (default paper), CELLS (default 4), TABLE_CELLS (default CELLS), WINDOW (default 40-80), BUILD
 # (default build), NICE (default 0), NP (default 1: ranks of each coarse run).
 # Exit status: 0 done (a coarse run that fails is reported and left out of the table); 2 bad arguments.

@@ -17,8 +17,10 @@ stub() {
   chmod +x "$tmp/bin/$1"
 }
 # cgd-coarse: --summarise writes its -o file; a coarse run records its arguments in RUN.args and fails (reported and
-# left out of the table by the scripts); cgd-fit and cgd-filter write their -o file
+# left out of the table by the scripts); --restart records them in RUN.restart.args and writes RUN/summary.h5 (fails
+# when RUN/restart_fails exists); cgd-fit and cgd-filter write their -o file
 stub cgd-coarse '[ "$1" = --summarise ] && { touch "$out"; exit 0; }
+[ "$1" = --restart ] && { echo "$*" > "$out.restart.args"; [ -f "$out/restart_fails" ] && exit 1; touch "$out/summary.h5"; exit 0; }
 echo "$*" > "$out.args"
 exit 1'
 stub cgd-fit 'echo "$*" > "$out.args"; touch "$out"'
@@ -128,6 +130,26 @@ PROFILE=half BUILD=$tmp/bin bash scripts/figure3_box.sh "$out" 0.05 3 1 micro > 
 status=$?
 [ $status -eq 2 ] && grep -q "106 d_p box" "$tmp/wrong.log" && [ ! -e "$out/figure3_c4/phi0.05_a3_micro_s1.args" ] &&
   ok "a paper-box filtered file in a half-box call: exit 2, nothing run" || fail "wrong box: exit $status, $(cat "$tmp/wrong.log")"
+
+# ---- a killed run: continued from its checkpoint; a partial run without one, or whose restart fails, started again ----
+out=$tmp/killed
+fake_filtered "$out/figure3_c4/filtered_phi0.05.h5" 53 0.05
+d=$out/figure3_c4
+mkdir -p "$d/phi0.05_a3_micro_s1" "$d/phi0.05_a3_micro_s2" "$d/phi0.05_a3_micro_s3"
+touch "$d/phi0.05_a3_micro_s1/checkpoint.h5" "$d/phi0.05_a3_micro_s2/partial" "$d/phi0.05_a3_micro_s3/checkpoint.h5" \
+  "$d/phi0.05_a3_micro_s3/restart_fails"
+PROFILE=half BUILD=$tmp/bin bash scripts/figure3_box.sh "$out" 0.05 3 1,2,3 micro > "$tmp/killed.log" 2>&1
+r1=$(cat "$d/phi0.05_a3_micro_s1.restart.args" 2>/dev/null)
+[ "$r1" = "--restart --quiet -o $d/phi0.05_a3_micro_s1" ] && [ -f "$d/phi0.05_a3_micro_s1/summary.h5" ] &&
+  [ ! -e "$d/phi0.05_a3_micro_s1.args" ] &&
+  ok "a run with a checkpoint and no summary: continued (cgd-coarse --restart -o RUN), not started again" ||
+  fail "killed run with a checkpoint: restart args '${r1}', $(cat "$tmp/killed.log")"
+[ ! -e "$d/phi0.05_a3_micro_s2.restart.args" ] && [ -n "$(args_of "$d/phi0.05_a3_micro_s2")" ] &&
+  [ ! -e "$d/phi0.05_a3_micro_s2/partial" ] &&
+  ok "a partial run without a checkpoint: removed and started again" || fail "partial run without a checkpoint"
+[ -e "$d/phi0.05_a3_micro_s3.restart.args" ] && [ -n "$(args_of "$d/phi0.05_a3_micro_s3")" ] &&
+  grep -q "phi0.05_a3_micro_s3: the restart failed" "$tmp/killed.log" &&
+  ok "a run whose restart fails: reported and started again" || fail "failed restart: $(cat "$tmp/killed.log")"
 
 # ---- closure_wide_filter.sh and closure_drift.sh at a dense <phi>: PHI_SET_0.30 after COARSE_SET ----
 out=$tmp/wide
