@@ -4,18 +4,19 @@
 # $coarse_sets (its --set options, given first), then that solids fraction, seed and parcel size on cells of $dx d_p,
 # then the options; niceness $nice_level, through the launcher array $launcher (empty: one rank) -> RUN (log RUN.log).
 # A run whose summary.h5 exists is kept; one killed before its end (its checkpoint.h5 there, no summary.h5) is
-# continued from its checkpoint (cgd-coarse --restart, the scene it was started with), and started again only when
-# that restart fails; a failed run is reported through the caller's say() and left out (status 0), so that one
-# failure does not stop the matrix.
+# continued from its checkpoint (cgd-coarse --restart, the scene it was started with: a changed window or model is not
+# applied to it; log RUN.restart.log), and started again only when that restart fails or writes no summary.h5 (a run
+# that diverges is so run twice); a failed run is reported through the caller's say() and left out (status 0), so
+# that one failure does not stop the matrix.
 coarse_run() {
   local run=$1 phi=$2 alpha=$3 seed=$4
   shift 4
   [ -f "$run/summary.h5" ] && return 0
   if [ -f "$run/checkpoint.h5" ]; then
     say "$(basename "$run") (continued from its checkpoint)"
-    nice -n "$nice_level" "${launcher[@]}" "$build/cgd-coarse" --restart --quiet -o "$run" >> "$run.log" 2>&1 &&
-      return 0
-    say "$(basename "$run"): the restart failed (log $run.log); run again from the start"
+    nice -n "$nice_level" "${launcher[@]}" "$build/cgd-coarse" --restart --quiet -o "$run" > "$run.restart.log" 2>&1 &&
+      [ -f "$run/summary.h5" ] && return 0
+    say "$(basename "$run"): the restart failed or wrote no summary.h5 (log $run.restart.log); run again from the start"
   fi
   rm -rf "$run"
   say "$(basename "$run")"

@@ -137,9 +137,12 @@ def alpha_list(text):
 def phi_list(text):
     """--rms-phis: a comma-separated list of numbers -> their set (as floats: 0.1 and 0.10 are one phi)."""
     try:
-        return {float(p) for p in text.split(",")}
+        phis = {float(p) for p in text.split(",")}
     except ValueError:
         raise argparse.ArgumentTypeError(f"{text!r} is not a comma-separated list of numbers")
+    if not all(0 < p < 1 for p in phis):
+        raise argparse.ArgumentTypeError(f"{text!r}: every solids fraction must lie in (0, 1)")
+    return phis
 
 
 def main(argv):
@@ -153,21 +156,37 @@ def main(argv):
     plot_path, rms_alphas, d = args.plot, args.rms_alphas, args.dir
     ref_err = {}
     refs = {}
+    spelled = {}  # float(phi) -> the resolved file's spelling of it (runs spelled 0.1 or 0.10 are one phi)
     for p in glob.glob(os.path.join(d, "resolved_phi*.h5")):
         phi = os.path.basename(p)[len("resolved_phi"):-3]
+        try:
+            value = float(phi)
+        except ValueError:
+            continue
+        if value in spelled:
+            print(f"closure_wide_table.py: {d} has two resolved files of phi = {value:g} (resolved_phi{spelled[value]}.h5 "
+                  f"and resolved_phi{phi}.h5): keep one", file=sys.stderr)
+            return 2
+        spelled[value] = phi
         refs[phi] = attr(p, "slip_over_ut")
         ref_err[phi] = attr(p, "slip_stderr")
     runs = {}
     for s in glob.glob(os.path.join(d, "*", "summary.h5")):
         m = NAME.match(os.path.basename(os.path.dirname(s)))
-        if not m or m["phi"] not in refs:
+        phi = spelled.get(float(m["phi"])) if m else None
+        if phi is None:
             continue
-        err = attr(s, "slip_over_ut") / refs[m["phi"]] - 1
-        own = attr(s, "slip_stderr") / refs[m["phi"]]
-        runs.setdefault((m["phi"], m["closure"], int(m["alpha"])), []).append((err, own))
+        err = attr(s, "slip_over_ut") / refs[phi] - 1
+        own = attr(s, "slip_stderr") / refs[phi]
+        runs.setdefault((phi, m["closure"], int(m["alpha"])), []).append((err, own))
     if not runs:
         print(f"closure_wide_table.py: no finished runs in {d}", file=sys.stderr)
         return 1
+    absent = sorted((args.rms_phis or set()) - {float(k[0]) for k in runs})
+    if absent:
+        print(f"closure_wide_table.py: --rms-phis {','.join(f'{p:g}' for p in absent)}: no finished runs at that phi in {d}",
+              file=sys.stderr)
+        return 2
     per_closure = {}  # closure -> [(phi, mean)] over the rms alphas
     table = {}
     for (phi, c, alpha) in sorted(runs, key=lambda k: (float(k[0]), closure_order(k[1]), k[2])):
@@ -194,7 +213,7 @@ def main(argv):
     print()
     over = "" if rms_alphas is None else f", α = {','.join(str(a) for a in sorted(rms_alphas))}"
     if args.rms_phis is not None:
-        over += f", ⟨φ⟩ = {','.join(f'{p:g}' for p in sorted(args.rms_phis))}"
+        over += f", ⟨φ⟩ = {','.join(spelled[p] for p in sorted(args.rms_phis))}"
 
     def rms_worst(m):
         return 100 * math.sqrt(sum(x * x for x in m) / len(m)), 100 * max(m, key=abs)

@@ -95,10 +95,27 @@ with tempfile.TemporaryDirectory() as d:
     p = subprocess.run([sys.executable, tool, d, "--rms-alphas", "3"], capture_output=True, text=True)
     check("| perfect table of the 4-cell grid | 22.0 % | +30.0 % | 2 |" in p.stdout,
           "without --rms-phis: g4's rms over both phis (sqrt((30^2 + 8^2)/2) = 22.0 %)")
+    p = subprocess.run([sys.executable, tool, d, "--rms-phis", "0.05,0.7"], capture_output=True, text=True)
+    check(p.returncode == 2 and "0.7: no finished runs" in p.stderr, "--rms-phis naming a phi with no runs: exit 2 with its message")
+    p = subprocess.run([sys.executable, tool, d, "--rms-phis", "nan"], capture_output=True, text=True)
+    check(p.returncode == 2 and "must lie in (0, 1)" in p.stderr, "--rms-phis nan: exit 2")
+    # a run spelled phi0.020 belongs to the resolved run spelled 0.02 (one phi, one row)
+    summary(os.path.join(d, "phi0.020_a4_g4_s1", "summary.h5"), 1.10, 0.01)
+    p = subprocess.run([sys.executable, tool, d], capture_output=True, text=True)
+    check("| 0.02 | 1.000 | perfect table of the 4-cell grid | 4 | +10.0 ± 1.0 % | 1 |" in p.stdout and "0.020" not in p.stdout,
+          "a run spelled phi0.020 is listed under the resolved run's 0.02")
     p = subprocess.run([sys.executable, tool, d, "--rms-phis", "0.05;0.1"], capture_output=True, text=True)
     check(p.returncode == 2 and "not a comma-separated list" in p.stderr, "--rms-phis with a bad list: exit 2 with its message")
     png = os.path.join(d, "figure.png")
     p = subprocess.run([sys.executable, tool, d, "--plot", png], capture_output=True, text=True)
     check(p.returncode == 0 and os.path.getsize(png) > 0, f"--plot writes the picture ({p.stderr.strip()})")
+    # four phi: two rows of at most three panels (4.0 inches a row at 120 dpi: 960 pixels high, 3 x 5.2 inches wide)
+    for phi in ("0.10", "0.20"):
+        summary(os.path.join(d, f"resolved_phi{phi}.h5"), 1.00, 0.01)
+        summary(os.path.join(d, f"phi{phi}_a3_g4_s1", "summary.h5"), 0.9, 0.01)
+    p = subprocess.run([sys.executable, tool, d, "--plot", png], capture_output=True, text=True)
+    import matplotlib.image
+    height, width = matplotlib.image.imread(png).shape[:2]
+    check(p.returncode == 0 and (height, width) == (960, 1872), f"--plot with four phi: two rows of three panels ({width} x {height})")
 print(f"{failures()} failed" if failures() else "all passed")
 sys.exit(1 if failures() else 0)
