@@ -8,19 +8,21 @@
 # applied to it; log RUN.restart.log), and started again only when that restart fails or writes no summary.h5 (a run
 # that diverges is so run twice); a failed run is reported through the caller's say() and left out (status 0), so
 # that one failure does not stop the matrix.
+# cgd_coarse ARGS...: the caller's $build/cgd-coarse at niceness $nice_level through its launcher array
+cgd_coarse() { nice -n "$nice_level" "${launcher[@]}" "$build/cgd-coarse" "$@"; }
 coarse_run() {
   local run=$1 phi=$2 alpha=$3 seed=$4
   shift 4
   [ -f "$run/summary.h5" ] && return 0
   if [ -f "$run/checkpoint.h5" ]; then
     say "$(basename "$run") (continued from its checkpoint)"
-    nice -n "$nice_level" "${launcher[@]}" "$build/cgd-coarse" --restart --quiet -o "$run" > "$run.restart.log" 2>&1 &&
+    cgd_coarse --restart --quiet -o "$run" > "$run.restart.log" 2>&1 &&
       [ -f "$run/summary.h5" ] && return 0
     say "$(basename "$run"): the restart failed or wrote no summary.h5 (log $run.restart.log); run again from the start"
   fi
   rm -rf "$run"
   say "$(basename "$run")"
-  nice -n "$nice_level" "${launcher[@]}" "$build/cgd-coarse" "$repo/$base_scene" --quiet "${coarse_sets[@]}" \
+  cgd_coarse "$repo/$base_scene" --quiet "${coarse_sets[@]}" \
     --set particles.solids_fraction="$phi" --set particles.seed="$seed" --set fluid.dx_over_dp="$dx" \
     --set particles.parcel_size="$alpha" "$@" -o "$run" > "$run.log" 2>&1 ||
     { say "$(basename "$run") failed (log $run.log)"; return 0; }

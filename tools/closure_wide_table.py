@@ -197,19 +197,23 @@ def main(argv):
         if (rms_alphas is None or alpha in rms_alphas) and (args.rms_phis is None or float(phi) in args.rms_phis):
             per_closure.setdefault(c, []).append((phi, mean))
         table[(phi, c, alpha)] = (mean, se, n)
-    closures = sorted(per_closure.keys() | {k[1] for k in table}, key=closure_order)
+    closures = sorted({k[1] for k in table}, key=closure_order)
+
+    def pm(mean, se):  # a mean error and its standard error, in %
+        return f"{100 * mean:+.1f} ± {100 * se:.1f}"
+
     if args.wide:
         print("| ⟨φ⟩ | resolved slip/u_t | α | " + " | ".join(closure_label(c) for c in closures) + " |")
         print("|---|---|---|" + "---|" * len(closures))
         for phi, alpha in sorted({(k[0], k[2]) for k in table}, key=lambda k: (float(k[0]), k[1])):
-            cells = [f"{100 * table[(phi, c, alpha)][0]:+.1f} ± {100 * table[(phi, c, alpha)][1]:.1f} ({table[(phi, c, alpha)][2]})"
-                     if (phi, c, alpha) in table else "" for c in closures]
+            cells = [f"{pm(*table[(phi, c, alpha)][:2])} ({table[(phi, c, alpha)][2]})" if (phi, c, alpha) in table else ""
+                     for c in closures]
             print(f"| {phi} | {refs[phi]:.3f} | {alpha} | " + " | ".join(cells) + " |")
     else:
         print("| ⟨φ⟩ | resolved slip/u_t | closure | α | error of the slip | seeds |")
         print("|---|---|---|---|---|---|")
         for (phi, c, alpha), (mean, se, n) in table.items():
-            print(f"| {phi} | {refs[phi]:.3f} | {closure_label(c)} | {alpha} | {100 * mean:+.1f} ± {100 * se:.1f} % | {n} |")
+            print(f"| {phi} | {refs[phi]:.3f} | {closure_label(c)} | {alpha} | {pm(mean, se)} % | {n} |")
     print()
     over = "" if rms_alphas is None else f", α = {','.join(str(a) for a in sorted(rms_alphas))}"
     if args.rms_phis is not None:
