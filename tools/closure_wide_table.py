@@ -17,7 +17,9 @@ experiment's closures and scripts/figure3_box.sh's), or one of those at another 
 Delta = r cells, e.g. radlr2) or <table|drift><held|own><G> (the table of the grid of G cells across, e.g.
 tableheld4, as CELLS=8 TABLE_CELLS=4 scripts/closure_drift.sh uses it). Prints a markdown table: per phi, closure and
 alpha, the relative error of the slip against the resolved run, mean over the seeds +- the standard error of that
-mean (the seeds' scatter / sqrt(n); one seed: the run's own batch-means error), and the seeds' count; then per
+mean (the seeds' scatter / sqrt(n); one seed: the run's own batch-means error), and the seeds' count, with how many
+of them have a window cgd-coarse found not stationary (the summary's `stationary` = 0: its halves differ by more
+than 3 standard errors; "(3, 1 not stationary)"); then per
 closure the rms and the worst of the means over every phi and alpha (with --rms-alphas, --rms-phis: over those only).
 """
 import argparse
@@ -44,6 +46,13 @@ LABELS = {
     "modelraw": "model fitted in this box, c_corr off",
     "modeln1": "model fitted in this box at n = 1, c_corr off",
 }
+
+
+def stationary(path):
+    """False when the coarse summary says its window is not stationary (attribute `stationary` = 0); True when it
+    says it is or does not say."""
+    with h5py.File(path, "r") as f:
+        return bool(f.attrs.get("stationary", 1))
 
 
 def attr(path, key):
@@ -96,7 +105,7 @@ def closure_order(c):
 
 
 def plot(path, refs, ref_err, table):
-    """table: {(phi, closure, alpha): (mean, se, n)} -> PNG at path."""
+    """table: {(phi, closure, alpha): (mean, se, n, not stationary)} -> PNG at path."""
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
@@ -178,7 +187,7 @@ def main(argv):
             continue
         err = attr(s, "slip_over_ut") / refs[phi] - 1
         own = attr(s, "slip_stderr") / refs[phi]
-        runs.setdefault((phi, m["closure"], int(m["alpha"])), []).append((err, own))
+        runs.setdefault((phi, m["closure"], int(m["alpha"])), []).append((err, own, stationary(s)))
     if not runs:
         print(f"closure_wide_table.py: no finished runs in {d}", file=sys.stderr)
         return 1
@@ -196,24 +205,32 @@ def main(argv):
         se = (math.sqrt(sum((x - mean) ** 2 for x in e) / (n - 1)) / math.sqrt(n)) if n > 1 else runs[(phi, c, alpha)][0][1]
         if (rms_alphas is None or alpha in rms_alphas) and (args.rms_phis is None or float(phi) in args.rms_phis):
             per_closure.setdefault(c, []).append((phi, mean))
-        table[(phi, c, alpha)] = (mean, se, n)
+        moving = sum(1 for x in runs[(phi, c, alpha)] if not x[2])
+        table[(phi, c, alpha)] = (mean, se, n, moving)
     closures = sorted({k[1] for k in table}, key=closure_order)
 
     def pm(mean, se):  # a mean error and its standard error, in %
         return f"{100 * mean:+.1f} ± {100 * se:.1f}"
 
+    def seeds(n, moving):  # the realisations' count, and how many of them are not stationary
+        return f"{n}, {moving} not stationary" if moving else f"{n}"
+
     if args.wide:
         print("| ⟨φ⟩ | resolved slip/u_t | α | " + " | ".join(closure_label(c) for c in closures) + " |")
         print("|---|---|---|" + "---|" * len(closures))
         for phi, alpha in sorted({(k[0], k[2]) for k in table}, key=lambda k: (float(k[0]), k[1])):
-            cells = [f"{pm(*table[(phi, c, alpha)][:2])} ({table[(phi, c, alpha)][2]})" if (phi, c, alpha) in table else ""
+            cells = [f"{pm(*table[(phi, c, alpha)][:2])} ({seeds(*table[(phi, c, alpha)][2:])})" if (phi, c, alpha) in table else ""
                      for c in closures]
             print(f"| {phi} | {refs[phi]:.3f} | {alpha} | " + " | ".join(cells) + " |")
     else:
         print("| ⟨φ⟩ | resolved slip/u_t | closure | α | error of the slip | seeds |")
         print("|---|---|---|---|---|---|")
-        for (phi, c, alpha), (mean, se, n) in table.items():
-            print(f"| {phi} | {refs[phi]:.3f} | {closure_label(c)} | {alpha} | {pm(mean, se)} % | {n} |")
+        for (phi, c, alpha), (mean, se, n, moving) in table.items():
+            print(f"| {phi} | {refs[phi]:.3f} | {closure_label(c)} | {alpha} | {pm(mean, se)} % | {seeds(n, moving)} |")
+    if any(v[3] for v in table.values()):
+        print()
+        print("not stationary: cgd-coarse found the run's window not stationary (its halves differ by more than 3 standard "
+              "errors: a plug or a cluster forming inside it); its mean depends on the window")
     print()
     over = "" if rms_alphas is None else f", α = {','.join(str(a) for a in sorted(rms_alphas))}"
     if args.rms_phis is not None:

@@ -6,7 +6,8 @@ Synthetic summaries: resolved <phi> = 0.05 slip 1.00; perfect table of grid 4 (g
 at r = 2 at alpha 3, one seed, slip 1.05 +- 0.02 (error +5.0 +- 2.0 %, the run's own error); a directory with
 another name pattern and one at a phi with no reference are ignored; a named closure (driftheld, alpha 3, one seed,
 slip 0.97 +- 0.01: -3.0 +- 1.0 %) is listed under its label before the numbered ones. rms per closure: g4 8.0 %,
-r2 5.0 %, driftheld 3.0 %.
+r2 5.0 %, driftheld 3.0 %. A run whose summary says stationary = 0 (g4 at alpha 6, slips 0.90 and 0.70: -20 +- 10 %)
+is counted beside the seeds.
 usage: /usr/bin/python3 tests/tools/closure_wide_table.py SOURCE_DIR"""
 import os
 import subprocess
@@ -106,6 +107,19 @@ with tempfile.TemporaryDirectory() as d:
           "a run spelled phi0.020 is listed under the resolved run's 0.02")
     p = subprocess.run([sys.executable, tool, d, "--rms-phis", "0.05;0.1"], capture_output=True, text=True)
     check(p.returncode == 2 and "not a comma-separated list" in p.stderr, "--rms-phis with a bad list: exit 2 with its message")
+    # a run whose window cgd-coarse found not stationary (summary attribute stationary = 0) is counted in its cell
+    summary(os.path.join(d, "phi0.05_a6_g4_s1", "summary.h5"), 0.90, 0.01)
+    summary(os.path.join(d, "phi0.05_a6_g4_s2", "summary.h5"), 0.70, 0.01)
+    with h5py.File(os.path.join(d, "phi0.05_a6_g4_s2", "summary.h5"), "a") as f:
+        f.attrs["stationary"] = 0
+    p = subprocess.run([sys.executable, tool, d], capture_output=True, text=True)
+    check("| 0.05 | 1.000 | perfect table of the 4-cell grid | 6 | -20.0 ± 10.0 % | 2, 1 not stationary |" in p.stdout
+          and "not stationary: cgd-coarse found" in p.stdout,
+          "a run with stationary = 0: counted beside the seeds, and the note under the table")
+    check("| 0.05 | 1.000 | perfect table of the 4-cell grid | 3 | -8.0 ± 1.2 % | 3 |" in p.stdout,
+          "runs without the attribute are not flagged")
+    p = subprocess.run([sys.executable, tool, d, "--wide"], capture_output=True, text=True)
+    check("-20.0 ± 10.0 (2, 1 not stationary)" in p.stdout, "--wide: the same count in the cell")
     png = os.path.join(d, "figure.png")
     p = subprocess.run([sys.executable, tool, d, "--plot", png], capture_output=True, text=True)
     check(p.returncode == 0 and os.path.getsize(png) > 0, f"--plot writes the picture ({p.stderr.strip()})")
