@@ -48,16 +48,11 @@ LABELS = {
 }
 
 
-def stationary(path):
-    """False when the coarse summary says its window is not stationary (attribute `stationary` = 0); True when it
-    says it is or does not say."""
+def read_summary(path):
+    """A summary's (slip_over_ut, slip_stderr, stationary), read in one opening; stationary is False only when the
+    summary says its window is not (attribute `stationary` = 0: cgd-coarse's), True when it says it is or does not say."""
     with h5py.File(path, "r") as f:
-        return bool(f.attrs.get("stationary", 1))
-
-
-def attr(path, key):
-    with h5py.File(path, "r") as f:
-        return float(f.attrs[key])
+        return float(f.attrs["slip_over_ut"]), float(f.attrs["slip_stderr"]), bool(f.attrs.get("stationary", 1))
 
 
 # a named closure of LABELS at another filter: <name>r<r> (a law evaluated at Delta = r cells, e.g. radlr2) and
@@ -177,17 +172,15 @@ def main(argv):
                   f"and resolved_phi{phi}.h5): keep one", file=sys.stderr)
             return 2
         spelled[value] = phi
-        refs[phi] = attr(p, "slip_over_ut")
-        ref_err[phi] = attr(p, "slip_stderr")
+        refs[phi], ref_err[phi], _ = read_summary(p)
     runs = {}
     for s in glob.glob(os.path.join(d, "*", "summary.h5")):
         m = NAME.match(os.path.basename(os.path.dirname(s)))
         phi = spelled.get(float(m["phi"])) if m else None
         if phi is None:
             continue
-        err = attr(s, "slip_over_ut") / refs[phi] - 1
-        own = attr(s, "slip_stderr") / refs[phi]
-        runs.setdefault((phi, m["closure"], int(m["alpha"])), []).append((err, own, stationary(s)))
+        slip, slip_se, still = read_summary(s)
+        runs.setdefault((phi, m["closure"], int(m["alpha"])), []).append((slip / refs[phi] - 1, slip_se / refs[phi], still))
     if not runs:
         print(f"closure_wide_table.py: no finished runs in {d}", file=sys.stderr)
         return 1
