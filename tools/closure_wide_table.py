@@ -1,7 +1,8 @@
 #!/usr/bin/python3
 """The closure experiments' table (scripts/closure_wide_filter.sh, scripts/closure_drift.sh; docs/closure.md).
 
-usage: tools/closure_wide_table.py DIR [--plot PNG] [--rms-alphas LIST] [--rms-phis LIST] [--wide]
+usage: tools/closure_wide_table.py DIR [--plot PNG] [--rms-alphas LIST] [--rms-phis LIST] [--wide] [--cells-in CSV]
+                                   [--cells-out CSV]
   --rms-alphas LIST: the per-closure rms and worst over these α only (e.g. 3,4,6,8: the paper's Figure 3 claim
     leaves α = 2 out); the table lists every α
   --rms-phis LIST: the same over these ⟨φ⟩ only (e.g. 0.02,0.05: the dilute end); the table lists every ⟨φ⟩
@@ -9,6 +10,10 @@ usage: tools/closure_wide_table.py DIR [--plot PNG] [--rms-alphas LIST] [--rms-p
     rms and worst per closure the same per closure and phi (where a closure misses, and by how much)
   --plot PNG: also the picture (the paper's Figure 3 as errors): per phi a panel, the error of the slip against alpha
   per closure (mean over the seeds +- its standard error), the resolved run's own +- standard error shaded.
+  --cells-out CSV: also the table's cells as CSV (CELL_COLUMNS: one row per phi, closure and alpha; errors in %)
+  --cells-in CSV: cells of an earlier table (a --cells-out file, e.g. data/validation/half_box_4cell.csv: runs of a
+    machine since replaced) for every phi, closure and alpha DIR has no finished run of; DIR's runs take precedence.
+    The table, the rms and the picture are then over both; stderr says how many cells came from the file.
 
 DIR holds resolved_phi<phi>.h5 (cgd-coarse --summarise of each resolved run over its sampling window) and the coarse
 runs phi<phi>_a<alpha>_<closure>_s<seed>/summary.h5, <closure> = g<G> (the perfect table of the grid of G cells
@@ -59,6 +64,54 @@ def read_summary(path):
 # <table or drift><held or own><G> (the table of the grid of G cells across used on the run's grid, e.g. tableheld4)
 AT_RATIO = re.compile(r"^(?P<base>[a-z]+?)r(?P<n>[0-9.]+)$")
 OF_GRID = re.compile(r"^(?P<base>(?:table|drift)(?:held|own))(?P<n>[0-9]+)$")
+
+
+# the columns of --cells-out and --cells-in: the resolved run's slip and its standard error (u_t), the closure's name
+# (the runs' label: radl, micro, perfect, modelraw, g4, ...), the mean error of the slip over the realisations and
+# its standard error (%), the realisations and how many of them cgd-coarse found not stationary (blank: not counted,
+# a table made before the tool counted them)
+CELL_COLUMNS = ["phi", "resolved_slip_over_ut", "resolved_stderr", "closure", "alpha", "error_pct", "stderr_pct",
+                "realisations", "not_stationary"]
+
+
+# how far (u_t) an earlier table's resolved slip may differ from DIR's and still be the same resolved run: the
+# rounding of a slip written to three decimals
+REF_TOLERANCE = 0.0015
+
+
+def read_cells(path):
+    """A --cells-out file -> ({phi: (slip, stderr)}, {(phi, closure, alpha): (mean, se, n, not stationary)}), the
+    errors as fractions; phi as the file spells it. A missing column or a value that is not a number: ValueError
+    naming the file, the line and the column."""
+    import csv
+    refs, cells = {}, {}
+    with open(path, newline="") as f:
+        rows = csv.DictReader(f)
+        missing = [c for c in CELL_COLUMNS if c not in (rows.fieldnames or [])]
+        if missing:
+            raise ValueError(f"{path}: no column {', '.join(missing)} (the columns are {','.join(CELL_COLUMNS)})")
+        for r in rows:
+            try:
+                phi = r["phi"]
+                float(phi)
+                refs[phi] = (float(r["resolved_slip_over_ut"]), float(r["resolved_stderr"]))
+                cells[(phi, r["closure"], int(r["alpha"]))] = (float(r["error_pct"]) / 100, float(r["stderr_pct"]) / 100,
+                                                              int(r["realisations"]),
+                                                              int(r["not_stationary"]) if r["not_stationary"] else None)
+            except (TypeError, ValueError) as e:
+                raise ValueError(f"{path}, line {rows.line_num}: {e}")
+    return refs, cells
+
+
+def write_cells(path, refs, ref_err, table):
+    """The table's cells -> CSV at path (CELL_COLUMNS; errors in %, to 1e-4 so that the table read back rounds as this one)."""
+    import csv
+    with open(path, "w", newline="") as f:
+        w = csv.writer(f)
+        w.writerow(CELL_COLUMNS)
+        for (phi, c, alpha), (mean, se, n, moving) in table.items():
+            w.writerow([phi, f"{refs[phi]:.4f}", f"{ref_err[phi]:.4f}", c, alpha, f"{100 * mean:.4f}", f"{100 * se:.4f}",
+                        n, "" if moving is None else moving])
 
 
 def named_variant(c):
@@ -156,6 +209,8 @@ def main(argv):
     ap.add_argument("--rms-alphas", type=alpha_list, metavar="LIST", help="the rms and worst over these alphas only")
     ap.add_argument("--rms-phis", type=phi_list, metavar="LIST", help="the rms and worst over these phis only")
     ap.add_argument("--wide", action="store_true", help="a row per phi and alpha, a column per closure")
+    ap.add_argument("--cells-in", metavar="CSV", help="cells of an earlier table for what DIR has not run")
+    ap.add_argument("--cells-out", metavar="CSV", help="also the table's cells as CSV")
     args = ap.parse_args(argv[1:])  # exit 2 with argparse's message on bad arguments
     plot_path, rms_alphas, d = args.plot, args.rms_alphas, args.dir
     ref_err = {}
@@ -173,6 +228,22 @@ def main(argv):
             return 2
         spelled[value] = phi
         refs[phi], ref_err[phi], _ = read_summary(p)
+    old_cells = {}
+    if args.cells_in:
+        try:
+            old_refs, old_cells = read_cells(args.cells_in)
+        except (OSError, ValueError) as e:
+            print(f"closure_wide_table.py: --cells-in: {e}", file=sys.stderr)
+            return 2
+        for phi, (slip, err) in old_refs.items():  # the file's phi spelled as DIR spells it, where DIR has it
+            mine = spelled.setdefault(float(phi), phi)
+            if mine in refs and abs(refs[mine] - slip) > REF_TOLERANCE:
+                print(f"closure_wide_table.py: --cells-in {args.cells_in}: its resolved slip at phi = {phi} is {slip} u_t, "
+                      f"{d}'s resolved_phi{mine}.h5 says {refs[mine]:.4f}: the cells were measured against another "
+                      f"resolved run", file=sys.stderr)
+                return 2
+            refs.setdefault(mine, slip)
+            ref_err.setdefault(mine, err)
     runs = {}
     for s in glob.glob(os.path.join(d, "*", "summary.h5")):
         m = NAME.match(os.path.basename(os.path.dirname(s)))
@@ -181,24 +252,34 @@ def main(argv):
             continue
         slip, slip_se, still = read_summary(s)
         runs.setdefault((phi, m["closure"], int(m["alpha"])), []).append((slip / refs[phi] - 1, slip_se / refs[phi], still))
-    if not runs:
+    earlier = {}
+    for (phi, c, alpha), cell in old_cells.items():
+        key = (spelled[float(phi)], c, alpha)
+        if key not in runs:
+            earlier[key] = cell
+    if args.cells_in:
+        print(f"closure_wide_table.py: {len(earlier)} cells from {args.cells_in} (DIR has no run of them)", file=sys.stderr)
+    if not runs and not earlier:
         print(f"closure_wide_table.py: no finished runs in {d}", file=sys.stderr)
         return 1
-    absent = sorted((args.rms_phis or set()) - {float(k[0]) for k in runs})
+    absent = sorted((args.rms_phis or set()) - {float(k[0]) for k in list(runs) + list(earlier)})
     if absent:
         print(f"closure_wide_table.py: --rms-phis {','.join(f'{p:g}' for p in absent)}: no finished runs at that phi in {d}",
               file=sys.stderr)
         return 2
     per_closure = {}  # closure -> [(phi, mean)] over the rms alphas
     table = {}
-    for (phi, c, alpha) in sorted(runs, key=lambda k: (float(k[0]), closure_order(k[1]), k[2])):
-        e = [x[0] for x in runs[(phi, c, alpha)]]
-        n = len(e)
-        mean = sum(e) / n
-        se = (math.sqrt(sum((x - mean) ** 2 for x in e) / (n - 1)) / math.sqrt(n)) if n > 1 else runs[(phi, c, alpha)][0][1]
+    for (phi, c, alpha) in sorted(list(runs) + list(earlier), key=lambda k: (float(k[0]), closure_order(k[1]), k[2])):
+        if (phi, c, alpha) in runs:
+            e = [x[0] for x in runs[(phi, c, alpha)]]
+            n = len(e)
+            mean = sum(e) / n
+            se = (math.sqrt(sum((x - mean) ** 2 for x in e) / (n - 1)) / math.sqrt(n)) if n > 1 else runs[(phi, c, alpha)][0][1]
+            moving = sum(1 for x in runs[(phi, c, alpha)] if not x[2])
+        else:
+            mean, se, n, moving = earlier[(phi, c, alpha)]
         if (rms_alphas is None or alpha in rms_alphas) and (args.rms_phis is None or float(phi) in args.rms_phis):
             per_closure.setdefault(c, []).append((phi, mean))
-        moving = sum(1 for x in runs[(phi, c, alpha)] if not x[2])
         table[(phi, c, alpha)] = (mean, se, n, moving)
     closures = sorted({k[1] for k in table}, key=closure_order)
 
@@ -250,6 +331,8 @@ def main(argv):
             print(f"| {closure_label(c)} | " + " | ".join(cells) + " |")
     if plot_path:
         plot(plot_path, refs, ref_err, table)
+    if args.cells_out:
+        write_cells(args.cells_out, refs, ref_err, table)
     return 0
 
 

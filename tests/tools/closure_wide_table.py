@@ -7,7 +7,8 @@ at r = 2 at alpha 3, one seed, slip 1.05 +- 0.02 (error +5.0 +- 2.0 %, the run's
 another name pattern and one at a phi with no reference are ignored; a named closure (driftheld, alpha 3, one seed,
 slip 0.97 +- 0.01: -3.0 +- 1.0 %) is listed under its label before the numbered ones. rms per closure: g4 8.0 %,
 r2 5.0 %, driftheld 3.0 %. A run whose summary says stationary = 0 (g4 at alpha 6, slips 0.90 and 0.70: -20 +- 10 %)
-is counted beside the seeds.
+is counted beside the seeds. --cells-out writes the cells as CSV and --cells-in reads them back (the same table), DIR's
+runs taking precedence.
 usage: /usr/bin/python3 tests/tools/closure_wide_table.py SOURCE_DIR"""
 import os
 import subprocess
@@ -120,6 +121,43 @@ with tempfile.TemporaryDirectory() as d:
           "runs without the attribute are not flagged")
     p = subprocess.run([sys.executable, tool, d, "--wide"], capture_output=True, text=True)
     check("-20.0 ± 10.0 (2, 1 not stationary)" in p.stdout, "--wide: the same count in the cell")
+    # --cells-out, then --cells-in: the same table from the CSV alone (a machine replaced, its runs gone), DIR's runs
+    # taking precedence over the file's cells, and a file measured against another resolved run refused
+    cells = os.path.join(d, "cells.csv")
+    p = subprocess.run([sys.executable, tool, d, "--wide", "--cells-out", cells], capture_output=True, text=True)
+    with open(cells) as f:
+        head, *rows = f.read().splitlines()
+    check(p.returncode == 0 and head.split(",")[:5] == ["phi", "resolved_slip_over_ut", "resolved_stderr", "closure", "alpha"]
+          and "0.05,1.0000,0.0100,g4,6,-20.0000,10.0000,2,1" in rows,
+          f"--cells-out: a row per cell, g4 at alpha 6: -20 +- 10 %, 2 realisations, 1 not stationary ({p.stderr.strip()})")
+    with tempfile.TemporaryDirectory() as e:
+        q = subprocess.run([sys.executable, tool, e, "--wide", "--cells-in", cells], capture_output=True, text=True)
+        check(q.returncode == 0 and q.stdout == p.stdout and f"{len(rows)} cells from" in q.stderr,
+              f"--cells-in alone: the same table as the runs gave ({q.stderr.strip()})")
+        summary(os.path.join(e, "resolved_phi0.05.h5"), 1.00, 0.01)
+        summary(os.path.join(e, "phi0.05_a6_g4_s1", "summary.h5"), 0.95, 0.01)
+        q = subprocess.run([sys.executable, tool, e, "--cells-in", cells], capture_output=True, text=True)
+        check("| 0.05 | 1.000 | perfect table of the 4-cell grid | 6 | -5.0 ± 1.0 % | 1 |" in q.stdout
+              and f"{len(rows) - 1} cells from" in q.stderr, "a run in DIR takes precedence over the file's cell")
+        check("| 0.05 | 1.000 | perfect table of the 4-cell grid | 3 | -8.0 ± 1.2 % | 3 |" in q.stdout,
+              "the cells DIR has not run come from the file")
+        summary(os.path.join(e, "resolved_phi0.05.h5"), 1.01, 0.01)
+        q = subprocess.run([sys.executable, tool, e, "--cells-in", cells], capture_output=True, text=True)
+        check(q.returncode == 2 and "measured against another resolved run" in q.stderr,
+              "a file whose resolved slip is not DIR's (1.00 against 1.01): exit 2 with its message")
+        bad = os.path.join(e, "bad.csv")
+        with open(bad, "w") as f:
+            f.write("phi,closure,alpha\n0.05,g4,3\n")
+        q = subprocess.run([sys.executable, tool, e, "--cells-in", bad], capture_output=True, text=True)
+        check(q.returncode == 2 and "no column resolved_slip_over_ut" in q.stderr, "a file without a column: exit 2 naming it")
+        with open(bad, "w") as f:
+            f.write(head + "\n" + rows[0] + "\n" + rows[0].replace(",3,", ",three,", 1) + "\n")
+        q = subprocess.run([sys.executable, tool, e, "--cells-in", bad], capture_output=True, text=True)
+        check(q.returncode == 2 and "line 3" in q.stderr, f"a value that is not a number: exit 2 naming the line ({q.stderr.strip()})")
+        with open(bad, "w") as f:
+            f.write(head + "\n" + rows[0].rsplit(",", 1)[0] + ",\n")
+        q = subprocess.run([sys.executable, tool, e, "--cells-in", bad], capture_output=True, text=True)
+        check(q.returncode == 0 and "not stationary" not in q.stdout, "a blank not_stationary (not counted): no mark")
     png = os.path.join(d, "figure.png")
     p = subprocess.run([sys.executable, tool, d, "--plot", png], capture_output=True, text=True)
     check(p.returncode == 0 and os.path.getsize(png) > 0, f"--plot writes the picture ({p.stderr.strip()})")
