@@ -81,25 +81,42 @@ REF_TOLERANCE = 0.0015
 
 def read_cells(path):
     """A --cells-out file -> ({phi: (slip, stderr)}, {(phi, closure, alpha): (mean, se, n, not stationary)}), the
-    errors as fractions; phi as the file spells it. A missing column or a value that is not a number: ValueError
-    naming the file, the line and the column."""
+    errors as fractions; phi as the file spells it. A missing column, a value that is not a finite number (or, for
+    the counts, not an integer), a cell listed twice or two resolved slips for one phi: ValueError naming the file,
+    the line and the column."""
     import csv
     refs, cells = {}, {}
+
+    def number(r, column, kind=float, blank=False):
+        text = r[column]
+        if blank and not text:
+            return None
+        try:
+            value = kind(text)
+        except (TypeError, ValueError):
+            value = None
+        if value is None or not math.isfinite(value):
+            raise ValueError(f"{path}, line {rows.line_num}, column {column}: {text!r} is not a finite "
+                             f"{'integer' if kind is int else 'number'}")
+        return value
+
     with open(path, newline="") as f:
         rows = csv.DictReader(f)
         missing = [c for c in CELL_COLUMNS if c not in (rows.fieldnames or [])]
         if missing:
             raise ValueError(f"{path}: no column {', '.join(missing)} (the columns are {','.join(CELL_COLUMNS)})")
         for r in rows:
-            try:
-                phi = r["phi"]
-                float(phi)
-                refs[phi] = (float(r["resolved_slip_over_ut"]), float(r["resolved_stderr"]))
-                cells[(phi, r["closure"], int(r["alpha"]))] = (float(r["error_pct"]) / 100, float(r["stderr_pct"]) / 100,
-                                                              int(r["realisations"]),
-                                                              int(r["not_stationary"]) if r["not_stationary"] else None)
-            except (TypeError, ValueError) as e:
-                raise ValueError(f"{path}, line {rows.line_num}: {e}")
+            phi = r["phi"]
+            number(r, "phi")
+            ref = (number(r, "resolved_slip_over_ut"), number(r, "resolved_stderr"))
+            if refs.setdefault(phi, ref) != ref:
+                raise ValueError(f"{path}, line {rows.line_num}, column resolved_slip_over_ut: phi = {phi} has two "
+                                 f"resolved runs ({refs[phi][0]} and {ref[0]} u_t)")
+            key = (phi, r["closure"], number(r, "alpha", int))
+            if key in cells:
+                raise ValueError(f"{path}, line {rows.line_num}: phi = {phi}, {key[1]}, alpha = {key[2]} is listed twice")
+            cells[key] = (number(r, "error_pct") / 100, number(r, "stderr_pct") / 100, number(r, "realisations", int),
+                          number(r, "not_stationary", int, blank=True))
     return refs, cells
 
 
@@ -252,35 +269,30 @@ def main(argv):
             continue
         slip, slip_se, still = read_summary(s)
         runs.setdefault((phi, m["closure"], int(m["alpha"])), []).append((slip / refs[phi] - 1, slip_se / refs[phi], still))
-    earlier = {}
-    for (phi, c, alpha), cell in old_cells.items():
-        key = (spelled[float(phi)], c, alpha)
-        if key not in runs:
-            earlier[key] = cell
+    table = {}  # (phi, closure, alpha) -> (mean, se, n, not stationary): DIR's runs, then the file's other cells
+    for key, found in runs.items():
+        e = [x[0] for x in found]
+        n = len(e)
+        mean = sum(e) / n
+        se = (math.sqrt(sum((x - mean) ** 2 for x in e) / (n - 1)) / math.sqrt(n)) if n > 1 else found[0][1]
+        table[key] = (mean, se, n, sum(1 for x in found if not x[2]))
+    earlier = {(spelled[float(phi)], c, alpha): cell for (phi, c, alpha), cell in old_cells.items()}
+    earlier = {key: cell for key, cell in earlier.items() if key not in table}
     if args.cells_in:
         print(f"closure_wide_table.py: {len(earlier)} cells from {args.cells_in} (DIR has no run of them)", file=sys.stderr)
-    if not runs and not earlier:
+    table = dict(sorted({**table, **earlier}.items(), key=lambda kv: (float(kv[0][0]), closure_order(kv[0][1]), kv[0][2])))
+    if not table:
         print(f"closure_wide_table.py: no finished runs in {d}", file=sys.stderr)
         return 1
-    absent = sorted((args.rms_phis or set()) - {float(k[0]) for k in list(runs) + list(earlier)})
+    absent = sorted((args.rms_phis or set()) - {float(k[0]) for k in table})
     if absent:
         print(f"closure_wide_table.py: --rms-phis {','.join(f'{p:g}' for p in absent)}: no finished runs at that phi in {d}",
               file=sys.stderr)
         return 2
     per_closure = {}  # closure -> [(phi, mean)] over the rms alphas
-    table = {}
-    for (phi, c, alpha) in sorted(list(runs) + list(earlier), key=lambda k: (float(k[0]), closure_order(k[1]), k[2])):
-        if (phi, c, alpha) in runs:
-            e = [x[0] for x in runs[(phi, c, alpha)]]
-            n = len(e)
-            mean = sum(e) / n
-            se = (math.sqrt(sum((x - mean) ** 2 for x in e) / (n - 1)) / math.sqrt(n)) if n > 1 else runs[(phi, c, alpha)][0][1]
-            moving = sum(1 for x in runs[(phi, c, alpha)] if not x[2])
-        else:
-            mean, se, n, moving = earlier[(phi, c, alpha)]
+    for (phi, c, alpha), (mean, *_) in table.items():
         if (rms_alphas is None or alpha in rms_alphas) and (args.rms_phis is None or float(phi) in args.rms_phis):
             per_closure.setdefault(c, []).append((phi, mean))
-        table[(phi, c, alpha)] = (mean, se, n, moving)
     closures = sorted({k[1] for k in table}, key=closure_order)
 
     def pm(mean, se):  # a mean error and its standard error, in %

@@ -153,7 +153,15 @@ with tempfile.TemporaryDirectory() as d:
         with open(bad, "w") as f:
             f.write(head + "\n" + rows[0] + "\n" + rows[0].replace(",3,", ",three,", 1) + "\n")
         q = subprocess.run([sys.executable, tool, e, "--cells-in", bad], capture_output=True, text=True)
-        check(q.returncode == 2 and "line 3" in q.stderr, f"a value that is not a number: exit 2 naming the line ({q.stderr.strip()})")
+        check(q.returncode == 2 and "line 3, column alpha" in q.stderr,
+              f"a value that is not a number: exit 2 naming the line and the column ({q.stderr.strip()})")
+        nan_error = ",".join(v if i != head.split(",").index("error_pct") else "nan" for i, v in enumerate(rows[0].split(",")))
+        for damage, what in ((nan_error, "column error_pct"),
+                             (rows[0] + "\n" + rows[0], "listed twice")):
+            with open(bad, "w") as f:
+                f.write(head + "\n" + damage + "\n")
+            q = subprocess.run([sys.executable, tool, e, "--cells-in", bad], capture_output=True, text=True)
+            check(q.returncode == 2 and what in q.stderr, f"a damaged file ({what}): exit 2 naming it ({q.stderr.strip()})")
         with open(bad, "w") as f:
             f.write(head + "\n" + rows[0].rsplit(",", 1)[0] + ",\n")
         q = subprocess.run([sys.executable, tool, e, "--cells-in", bad], capture_output=True, text=True)
